@@ -1,0 +1,58 @@
+"""Plain-text description of a simulation's model, for ``pvcloth info``."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def describe(sim) -> str:
+    """A few lines that say what the model built and how it will be stepped.
+
+    Parameters
+    ----------
+    sim : Simulation
+
+    Returns
+    -------
+    str
+    """
+    model, scene = sim.model, sim.scene
+    nx, ny = sim.shape
+    lines = [
+        f"scene       {scene.name}",
+        f"particles   {model.n_points} ({nx} x {ny}), cloth {scene.cloth.size[0]:g} x "
+        f"{scene.cloth.size[1]:g} m, {scene.cloth.orientation}",
+        f"mass        {model.mass.sum():.6g} kg total, {model.mass.min():.3g} to "
+        f"{model.mass.max():.3g} kg per point",
+    ]
+    springs = model.springs
+    lines.append(
+        "springs     "
+        + (", ".join(f"{s.family} {s.count}" for s in springs) if springs else "none")
+        + f" ({sum(s.count for s in springs)} in all)"
+    )
+    lines.append("forces      " + ("; ".join(t.describe() for t in model.forces) or "none"))
+    pinned = np.flatnonzero(sim.control.pinned)
+    shown = ", ".join(f"({k % nx}, {k // nx})" for k in pinned[:6])
+    more = f" and {pinned.size - 6} more" if pinned.size > 6 else ""
+    lines.append(f"pins        {pinned.size} point(s): {shown or 'none'}{more}")
+    lines.append(
+        f"integrator  {sim.integrator.name} (order {sim.integrator.order}: "
+        f"{sim.integrator.description}), dt = {sim.dt:.4g} s"
+    )
+    stable = sim.stable_dt()
+    if stable is None:
+        lines.append("stable dt   no limit estimated for this integrator")
+    elif stable == 0.0:
+        lines.append("stable dt   none: the stiffest mode is undamped and grows at any step")
+    elif math.isinf(stable):
+        lines.append("stable dt   unlimited (no stiffness on free points)")
+    else:
+        verdict = "ok" if sim.dt <= stable else "TOO LARGE: expect divergence"
+        share = sim.dt / stable
+        lines.append(
+            f"stable dt   about {stable:.4g} s at rest (dt is {share:.2f} of it: {verdict})"
+        )
+    return "\n".join(lines)

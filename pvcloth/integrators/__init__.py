@@ -1,0 +1,17 @@
+"""Time integrators, one file each, found by name through :data:`INTEGRATORS`.
+
+To add one: write a subclass of :class:`Integrator` in its own module,
+decorate it with :func:`register` and import the module here.
+"""
+
+from . import explicit_euler, symplectic_euler  # noqa: F401  (registers them)
+from .base import INTEGRATORS, Integrator, register
+
+__all__ = ["INTEGRATORS", "Integrator", "get_integrator", "register"]
+
+
+def get_integrator(name: str) -> Integrator:
+    """A new integrator instance by registry name, e.g. ``"symplectic_euler"``."""
+    from ..validation import choice
+
+    return INTEGRATORS[choice("integrator", name, sorted(INTEGRATORS))]()

@@ -1,0 +1,146 @@
+"""The model: everything about a cloth that does not change while it moves.
+
+:func:`build_model` turns a :class:`~pvcloth.scene.Scene` into a
+:class:`Model` holding the grid, the masses, the default pins and exactly the
+force terms the scene asks for, nothing more.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .forces import AirDamping, Gravity, Springs
+from .grid import initial_positions, lumped_masses
+
+
+@dataclass
+class Model:
+    """Constants of a cloth simulation.
+
+    Attributes
+    ----------
+    shape : (int, int)
+        ``(ny, nx)``: rows along the height, points per row.
+    rest_positions : ndarray, shape (N, 3)
+        Initial positions, in VTK point order (index ``i + nx * j``).
+    mass : ndarray, shape (N,)
+        Point masses in kg.
+    pinned : ndarray of bool, shape (N,)
+        Points pinned by the scene.
+    forces : list
+        Force terms (see :mod:`pvcloth.forces`), only those the scene needs.
+    """
+
+    shape: tuple[int, int]
+    rest_positions: np.ndarray
+    mass: np.ndarray
+    pinned: np.ndarray
+    forces: list = field(default_factory=list)
+
+    @property
+    def n_points(self) -> int:
+        return self.mass.size
+
+    @property
+    def springs(self) -> list[Springs]:
+        """The spring families that were built."""
+        return [term for term in self.forces if isinstance(term, Springs)]
+
+    def compute_forces(self, x: np.ndarray, v: np.ndarray, out: np.ndarray | None = None):
+        """Total force ``(N, 3)`` on every point (pins included)."""
+        f = np.zeros_like(x) if out is None else out
+        if out is not None:
+            f.fill(0.0)
+        for term in self.forces:
+            term.accumulate(x, v, f)
+        return f
+
+    def potential_energy(self, x: np.ndarray) -> float:
+        return sum(term.potential_energy(x) for term in self.forces)
+
+    def kinetic_energy(self, v: np.ndarray) -> float:
+        return 0.5 * float(self.mass @ np.einsum("ij,ij->i", v, v))
+
+    def jacobians(self, x: np.ndarray, v: np.ndarray):
+        """Sum of the terms' ``(dF/dx, dF/dv)`` as sparse ``(3N, 3N)`` matrices."""
+        import scipy.sparse as sp
+
+        size = 3 * self.n_points
+        dfdx = sp.csr_matrix((size, size))
+        dfdv = sp.csr_matrix((size, size))
+        for term in self.forces:
+            jx, jv = term.jacobians(x, v)
+            if jx is not None:
+                dfdx = dfdx + jx
+            if jv is not None:
+                dfdv = dfdv + jv
+        return dfdx, dfdv
+
+
+def pinned_mask(scene) -> np.ndarray:
+    """Boolean mask ``(N,)`` of the points the scene pins."""
+    nx, ny = scene.cloth.resolution
+    mask = np.zeros((ny, nx), dtype=bool)
+    pins = scene.pins
+    top, right = ny - 1, nx - 1
+    corner = {
+        "top-left": (top, 0),
+        "top-right": (top, right),
+        "bottom-left": (0, 0),
+        "bottom-right": (0, right),
+    }
+    for name in pins.corners:
+        mask[corner[name]] = True
+    edge = {
+        "top": (top, slice(None)),
+        "bottom": (0, slice(None)),
+        "left": (slice(None), 0),
+        "right": (slice(None), right),
+    }
+    for name in pins.edges:
+        mask[edge[name]] = True
+    for i, j in pins.points:
+        mask[j, i] = True
+    flat = mask.ravel()
+    flat[list(pins.indices)] = True
+    return flat
+
+
+def build_model(scene) -> Model:
+    """Build the model a scene describes, with only the terms it needs.
+
+    Parameters
+    ----------
+    scene : Scene
+
+    Returns
+    -------
+    Model
+
+    Examples
+    --------
+    >>> import pvcloth
+    >>> scene = pvcloth.Scene(springs=pvcloth.SpringsSpec(bending=None))
+    >>> [term.name for term in pvcloth.build_model(scene).forces]
+    ['structural springs', 'shear springs', 'gravity']
+    """
+    cloth = scene.cloth
+    nx, ny = cloth.resolution
+    x = initial_positions(cloth)
+    mass = lumped_masses(cloth).ravel()
+    spacing = (cloth.size[0] / (nx - 1), cloth.size[1] / (ny - 1))
+    forces: list = []
+    for family in ("structural", "shear", "bending"):
+        spec = getattr(scene.springs, family)
+        if spec is None:
+            continue
+        term = Springs.build(family, x, spec.stiffness, spec.damping, spacing)
+        if term.count:
+            forces.append(term)
+    if any(scene.gravity):
+        forces.append(Gravity(np.asarray(scene.gravity, dtype=float), mass))
+    if scene.air_damping > 0:
+        forces.append(AirDamping(scene.air_damping, mass))
+    return Model((ny, nx), x.reshape(-1, 3).copy(), mass, pinned_mask(scene), forces)

@@ -1,0 +1,381 @@
+"""Scene description: what the user asked for, validated.
+
+A scene is a tree of frozen dataclasses. It can be built in Python or read
+from a TOML file (:func:`load_scene`); both routes go through the same
+constructors, so both give equal, validated objects. Every bad key or value
+raises :class:`~pvcloth.errors.SceneError` naming the key, the value and what
+is allowed.
+
+Material parameterisation (why these units): stiffness is given per cloth,
+not per spring, so refining the grid approximates the same cloth.
+
+- ``stretch`` (N/m) is the membrane stiffness of the sheet: the tension per
+  unit width that doubles its length. A spring along x of rest length ``hx``
+  that stands for a strip ``hy`` wide gets ``k = stretch * hy / hx``.
+- ``shear`` (N/m) plays the same role for the diagonal springs, each of which
+  gets ``k = shear`` (independent of the cell size, as for a square cell).
+- ``bending`` (N/m) is scaled like ``stretch`` over springs two cells long.
+  Bending springs resist folding only through second-order length change, so
+  they are a regulariser, not a converging plate model (see the docs).
+- Springs that lie on the cloth's border stand for half a strip and get half
+  the stiffness and damping (the trapezoid rule), as do the border masses.
+- ``damping`` (N s/m) of each family is scaled like its stiffness.
+- ``mass`` is the total mass, lumped to points by area (trapezoid rule).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+from .errors import SceneError
+from .integrators import INTEGRATORS
+from .validation import check_keys, choice, integer, real, sequence, vector
+
+#: Largest number of points along one side of the cloth.
+MAX_RESOLUTION = 4096
+ORIENTATIONS = ("vertical", "horizontal")
+CORNERS = ("top-left", "top-right", "bottom-left", "bottom-right")
+EDGES = ("top", "bottom", "left", "right")
+
+
+def _set(obj, name: str, value) -> None:
+    object.__setattr__(obj, name, value)
+
+
+@dataclass(frozen=True)
+class ClothSpec:
+    """The sheet of cloth: size, resolution, mass and where it starts.
+
+    Parameters
+    ----------
+    size : (float, float)
+        Width and height in metres (along the point index i and j).
+    resolution : (int, int)
+        Points along the width (``nx``) and the height (``ny``), each 2 to 4096.
+    mass : float
+        Total mass in kilograms, greater than zero.
+    orientation : {"vertical", "horizontal"}
+        ``"vertical"`` hangs the cloth in the x-z plane (j runs up along z);
+        ``"horizontal"`` lays it flat in the x-y plane (j runs along y).
+    center : (float, float, float)
+        Position of the cloth's centre in metres.
+
+    Examples
+    --------
+    >>> from pvcloth import ClothSpec
+    >>> ClothSpec(size=(2.0, 1.0), resolution=(41, 21)).resolution
+    (41, 21)
+    """
+
+    size: tuple[float, float] = (1.0, 1.0)
+    resolution: tuple[int, int] = (20, 20)
+    mass: float = 0.2
+    orientation: str = "vertical"
+    center: tuple[float, float, float] = (0.0, 0.0, 1.0)
+
+    def __post_init__(self):
+        _set(self, "size", vector("size", self.size, 2, minimum=0.0, exclusive=True))
+        res = sequence("resolution", self.resolution, 2)
+        _set(
+            self,
+            "resolution",
+            tuple(
+                integer(f"resolution[{n}]", r, minimum=2, maximum=MAX_RESOLUTION)
+                for n, r in enumerate(res)
+            ),
+        )
+        _set(self, "mass", real("mass", self.mass, minimum=0.0, exclusive=True))
+        _set(self, "orientation", choice("orientation", self.orientation, ORIENTATIONS))
+        _set(self, "center", vector("center", self.center, 3))
+
+
+@dataclass(frozen=True)
+class SpringSpec:
+    """Stiffness (N/m) and damping (N s/m) of one spring family.
+
+    See the module docstring for how these per-cloth values become per-spring
+    constants.
+    """
+
+    stiffness: float
+    damping: float = 0.0
+
+    def __post_init__(self):
+        _set(self, "stiffness", real("stiffness", self.stiffness, minimum=0.0))
+        _set(self, "damping", real("damping", self.damping, minimum=0.0))
+
+
+@dataclass(frozen=True)
+class SpringsSpec:
+    """The three spring families; leave one out (``None``) to build none of it.
+
+    Examples
+    --------
+    >>> from pvcloth import SpringSpec, SpringsSpec
+    >>> SpringsSpec(bending=None).bending is None
+    True
+    """
+
+    structural: SpringSpec | None = SpringSpec(400.0, 0.5)
+    shear: SpringSpec | None = SpringSpec(40.0, 0.05)
+    bending: SpringSpec | None = SpringSpec(4.0, 0.005)
+
+    def __post_init__(self):
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if value is not None and not isinstance(value, SpringSpec):
+                raise SceneError(
+                    f.name, f"expected a SpringSpec or None, got {type(value).__name__}"
+                )
+
+
+@dataclass(frozen=True)
+class PinSpec:
+    """Which points are held in place.
+
+    The default pins the two top corners. Any combination of corners, whole
+    edges, ``(i, j)`` grid points and flat point indices (``i + nx * j``, the
+    VTK point order) may be given; their union is pinned.
+
+    Examples
+    --------
+    >>> from pvcloth import PinSpec
+    >>> PinSpec(corners=(), edges=("top",)).edges
+    ('top',)
+    """
+
+    corners: tuple[str, ...] = ("top-left", "top-right")
+    edges: tuple[str, ...] = ()
+    points: tuple[tuple[int, int], ...] = ()
+    indices: tuple[int, ...] = ()
+
+    def __post_init__(self):
+        corners = sequence("corners", self.corners)
+        _set(
+            self,
+            "corners",
+            tuple(choice(f"corners[{n}]", c, CORNERS) for n, c in enumerate(corners)),
+        )
+        edges = sequence("edges", self.edges)
+        _set(self, "edges", tuple(choice(f"edges[{n}]", e, EDGES) for n, e in enumerate(edges)))
+        points = []
+        for n, p in enumerate(sequence("points", self.points)):
+            pair = sequence(f"points[{n}]", p, 2)
+            points.append(
+                tuple(
+                    integer(f"points[{n}][{m}]", q, minimum=0, maximum=MAX_RESOLUTION - 1)
+                    for m, q in enumerate(pair)
+                )
+            )
+        _set(self, "points", tuple(points))
+        _set(
+            self,
+            "indices",
+            tuple(
+                integer(f"indices[{n}]", k, minimum=0, maximum=MAX_RESOLUTION**2 - 1)
+                for n, k in enumerate(sequence("indices", self.indices))
+            ),
+        )
+
+
+@dataclass(frozen=True)
+class SolverSpec:
+    """Time integration: which integrator and its fixed step in seconds."""
+
+    integrator: str = "symplectic_euler"
+    dt: float = 1e-3
+
+    def __post_init__(self):
+        _set(self, "integrator", choice("integrator", self.integrator, sorted(INTEGRATORS)))
+        _set(self, "dt", real("dt", self.dt, minimum=0.0, exclusive=True, maximum=10.0))
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A complete, validated description of a cloth simulation.
+
+    Parameters
+    ----------
+    name : str
+        Label used in messages and output names.
+    cloth : ClothSpec
+        The sheet.
+    springs : SpringsSpec
+        Spring families; any can be ``None``.
+    pins : PinSpec
+        Pinned points (default: the two top corners).
+    solver : SolverSpec
+        Integrator and time step.
+    gravity : (float, float, float)
+        Acceleration of gravity in m/s^2; z is up. ``(0, 0, 0)`` builds no
+        gravity term.
+    air_damping : float
+        Linear drag on each point's absolute velocity, in 1/s (force
+        ``-air_damping * m * v``). Zero builds no drag term.
+
+    Examples
+    --------
+    >>> from pvcloth import Scene, ClothSpec
+    >>> scene = Scene(cloth=ClothSpec(resolution=(8, 8)))
+    >>> scene == Scene.from_dict({"cloth": {"resolution": [8, 8]}})
+    True
+    """
+
+    name: str = "scene"
+    cloth: ClothSpec = field(default_factory=ClothSpec)
+    springs: SpringsSpec = field(default_factory=SpringsSpec)
+    pins: PinSpec = field(default_factory=PinSpec)
+    solver: SolverSpec = field(default_factory=SolverSpec)
+    gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
+    air_damping: float = 0.0
+
+    def __post_init__(self):
+        if not isinstance(self.name, str):
+            raise SceneError("name", f"expected text, got {type(self.name).__name__}")
+        for f in fields(self):
+            expected = _NESTED.get(f.name)
+            if expected and not isinstance(getattr(self, f.name), expected):
+                raise SceneError(
+                    f.name,
+                    f"expected a {expected.__name__}, got {type(getattr(self, f.name)).__name__}",
+                )
+        _set(self, "gravity", vector("gravity", self.gravity, 3))
+        _set(self, "air_damping", real("air_damping", self.air_damping, minimum=0.0))
+        self._check_pins_fit()
+
+    def _check_pins_fit(self) -> None:
+        nx, ny = self.cloth.resolution
+        for n, (i, j) in enumerate(self.pins.points):
+            if i >= nx or j >= ny:
+                raise SceneError(
+                    f"pins.points[{n}]",
+                    f"({i}, {j}) is outside the {nx}x{ny} grid; "
+                    f"i must be below {nx} and j below {ny}",
+                )
+        for n, k in enumerate(self.pins.indices):
+            if k >= nx * ny:
+                raise SceneError(
+                    f"pins.indices[{n}]",
+                    f"{k} is outside the grid of {nx * ny} points (0 to {nx * ny - 1})",
+                )
+
+    # -- construction from plain data ---------------------------------------
+
+    @classmethod
+    def from_dict(cls, data: Any, name: str | None = None) -> Scene:
+        """Build a scene from nested dictionaries (as TOML or JSON give).
+
+        Parameters
+        ----------
+        data : dict
+            Keys as in the scene files; missing keys take their defaults.
+        name : str, optional
+            Overrides ``data["name"]``.
+
+        Returns
+        -------
+        Scene
+            The validated scene.
+
+        Raises
+        ------
+        SceneError
+            For any unknown key or bad value.
+        """
+        data = dict(check_keys("", data, [f.name for f in fields(cls)]))
+        if name is not None:
+            data["name"] = name
+        kwargs: dict[str, Any] = {}
+        for key, value in data.items():
+            if key == "springs":
+                kwargs[key] = _springs_from_dict(value)
+            elif key in _NESTED:
+                kwargs[key] = _spec_from_dict(_NESTED[key], value, key)
+            else:
+                kwargs[key] = value
+        return cls(**kwargs)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain nested dictionaries that :meth:`from_dict` turns back into this scene."""
+        return _plain(dataclasses.asdict(self))
+
+    def replace(self, **changes) -> Scene:
+        """A copy with top-level fields replaced (validated again)."""
+        return dataclasses.replace(self, **changes)
+
+
+_NESTED = {"cloth": ClothSpec, "springs": SpringsSpec, "pins": PinSpec, "solver": SolverSpec}
+
+
+def _spec_from_dict(cls, data, path: str):
+    check_keys(path, data, [f.name for f in fields(cls)])
+    for f in fields(cls):
+        required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+        if required and f.name not in data:
+            raise SceneError(f"{path}.{f.name}", "is required here")
+    try:
+        return cls(**data)
+    except SceneError as error:
+        raise error.under(path) from None
+
+
+def _springs_from_dict(data) -> SpringsSpec:
+    # A family missing from the table is not built; the table itself being
+    # absent keeps the defaults (handled by the caller never getting here).
+    check_keys("springs", data, [f.name for f in fields(SpringsSpec)])
+    families = {}
+    for f in fields(SpringsSpec):
+        value = data.get(f.name)
+        families[f.name] = (
+            None if value is None else _spec_from_dict(SpringSpec, value, f"springs.{f.name}")
+        )
+    return SpringsSpec(**families)
+
+
+def _plain(value):
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items() if v is not None}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a TOML scene file.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.toml`` file; the scene's name defaults to the file's stem.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        If the file cannot be read, is not valid TOML, or describes a bad scene.
+
+    Examples
+    --------
+    >>> import pvcloth
+    >>> scene = pvcloth.load_scene("data/scenes/hanging.toml")  # doctest: +SKIP
+    >>> scene.name  # doctest: +SKIP
+    'hanging'
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as error:
+        raise SceneError("", f"cannot read scene file {str(path)!r}: {error.strerror}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise SceneError("", f"{path}: not valid TOML: {error}") from None
+    data.setdefault("name", path.stem)
+    return Scene.from_dict(data)

@@ -1,0 +1,59 @@
+"""Shared helpers: small scenes and analytic reference systems."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pvcloth
+from pvcloth import ClothSpec, PinSpec, Scene, SolverSpec, SpringSpec, SpringsSpec
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = ROOT / "data" / "scenes"
+
+
+def small_scene(
+    n: int = 8,
+    *,
+    stiffness: float = 100.0,
+    damping: float = 0.0,
+    air_damping: float = 0.0,
+    gravity=(0.0, 0.0, -9.81),
+    pins: PinSpec | None = None,
+    orientation: str = "vertical",
+    integrator: str = "symplectic_euler",
+    dt: float = 1e-3,
+    mass: float = 0.2,
+) -> Scene:
+    """A 1 m square cloth of ``n x n`` points with all three spring families."""
+    return Scene(
+        name=f"small{n}",
+        cloth=ClothSpec(size=(1.0, 1.0), resolution=(n, n), mass=mass, orientation=orientation),
+        springs=SpringsSpec(
+            structural=SpringSpec(stiffness, damping),
+            shear=SpringSpec(stiffness / 10, damping / 10),
+            bending=SpringSpec(stiffness / 100, damping / 100),
+        ),
+        pins=PinSpec() if pins is None else pins,
+        solver=SolverSpec(integrator=integrator, dt=dt),
+        gravity=gravity,
+        air_damping=air_damping,
+    )
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(20261122)
+
+
+@pytest.fixture
+def scenes_dir() -> Path:
+    return SCENES
+
+
+def free_cloth(n=5, **kwargs) -> pvcloth.Simulation:
+    """A cloth with no pins and no gravity."""
+    scene = small_scene(n, pins=PinSpec(corners=()), gravity=(0, 0, 0), **kwargs)
+    return pvcloth.Simulation(scene)
