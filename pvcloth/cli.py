@@ -36,7 +36,7 @@ def cmd_simulate(args) -> None:
     for _ in tqdm(
         range(frames), desc=f"simulating {sim.scene.name}", unit="frame", disable=args.quiet
     ):
-        sim.advance(1.0 / args.fps)
+        sim.advance(args.seconds / frames)
     wall = time.perf_counter() - start
     energy = sim.energy()
     z = sim.positions[:, 2]
@@ -46,6 +46,26 @@ def cmd_simulate(args) -> None:
         f"({sim.integrator.name}) in {wall:.3g} s wall ({sim.time / wall:.3g} x real time)\n"
         f"lowest point z = {z.min():.4g} m, centre of mass z = {centre:.4g} m\n"
         f"energy: kinetic {energy['kinetic']:.4g} J, potential {energy['potential']:.4g} J"
+    )
+
+
+def cmd_render(args) -> None:
+    from .movie import parse_size, render
+
+    sim = _simulation(args)
+    stats = render(
+        sim,
+        args.output,
+        frames=args.frames,
+        fps=args.fps,
+        size=parse_size(args.size),
+        progress=not args.quiet,
+    )
+    ms = stats.medians_ms()
+    print(
+        f"wrote {stats.path} ({stats.frames} frames, {sim.time:.3g} s simulated); median ms "
+        f"per frame: physics {ms['physics']:.1f}, drawing {ms['drawing']:.1f}, "
+        f"encoding {ms['encoding']:.1f}"
     )
 
 
@@ -63,6 +83,15 @@ def build_parser() -> argparse.ArgumentParser:
     simulate.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
     simulate.add_argument("--quiet", action="store_true", help="no progress bar")
     simulate.set_defaults(func=cmd_simulate)
+
+    render = sub.add_parser("render", help="write a GIF, MP4 or PNG off-screen")
+    _add_overrides(render)
+    render.add_argument("-o", "--output", required=True, help="OUT.gif, OUT.mp4 or OUT.png")
+    render.add_argument("--frames", type=int, default=90, help="frames (default 90)")
+    render.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
+    render.add_argument("--size", default="640x480", help="WIDTHxHEIGHT (default 640x480)")
+    render.add_argument("--quiet", action="store_true", help="no progress bar")
+    render.set_defaults(func=cmd_render)
     return parser
 
 

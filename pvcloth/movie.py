@@ -1,0 +1,222 @@
+"""Off-screen movies and pictures: GIF, MP4 or PNG, written safely.
+
+Output goes to a hidden temporary file beside the target and is renamed into
+place only when it is complete. If the run is interrupted (Ctrl-C, an error,
+a diverging simulation) after some frames, the writer is closed properly and
+the frames done so far become the output; with no frame done, no file is
+left. :class:`MovieInterrupted` says which happened.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import PvclothError, SceneError
+
+FORMATS = (".gif", ".mp4", ".png")
+
+
+class MovieInterrupted(PvclothError):
+    """A movie stopped early. ``path`` is the valid partial movie, or ``None``
+    if no frame was finished and nothing was written."""
+
+    def __init__(self, message: str, path: Path | None, frames: int):
+        super().__init__(message)
+        self.path = path
+        self.frames = frames
+
+
+@dataclass
+class RenderStats:
+    """Where the time of each frame went, in seconds per frame."""
+
+    path: Path
+    frames: int
+    physics: list[float] = field(default_factory=list)
+    drawing: list[float] = field(default_factory=list)
+    encoding: list[float] = field(default_factory=list)
+    closing: float = 0.0  # finishing the file (a GIF is quantised and written here)
+
+    def medians_ms(self) -> dict[str, float]:
+        """Median milliseconds per frame of each stage; encoding includes an
+        equal share of the time spent finishing the file."""
+        stages = {"physics": self.physics, "drawing": self.drawing, "encoding": self.encoding}
+        medians = {k: 1e3 * float(np.median(v)) if v else 0.0 for k, v in stages.items()}
+        medians["encoding"] += 1e3 * self.closing / max(self.frames, 1)
+        return medians
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """``"640x480"`` -> ``(640, 480)``, with a clear error otherwise."""
+    try:
+        width, height = (int(part) for part in text.lower().split("x"))
+    except ValueError:
+        raise SceneError("size", f"expected WIDTHxHEIGHT like 640x480, got {text!r}") from None
+    if not (16 <= width <= 8192 and 16 <= height <= 8192):
+        raise SceneError("size", f"each side must be 16 to 8192 pixels, got {text!r}")
+    return width, height
+
+
+class _FrameWriter:
+    """imageio writer for GIF/MP4, or a last-frame holder for PNG."""
+
+    def __init__(self, path: Path, fps: float):
+        import imageio.v2 as imageio
+
+        self.path, self.last = path, None
+        suffix = path.suffix.lower()
+        if suffix == ".gif":
+            self.writer = imageio.get_writer(path, mode="I", duration=1000.0 / fps, loop=0)
+        elif suffix == ".mp4":
+            self.writer = imageio.get_writer(
+                path,
+                fps=fps,
+                codec="libx264",
+                quality=7,
+                macro_block_size=2,
+                ffmpeg_log_level="error",
+            )
+        else:
+            self.writer = None
+
+    def append(self, image: np.ndarray) -> None:
+        if self.writer is None:
+            self.last = image
+        else:
+            self.writer.append_data(image)
+
+    def close(self) -> None:
+        if self.writer is not None:
+            self.writer.close()
+        elif self.last is not None:
+            import imageio.v2 as imageio
+
+            imageio.imwrite(self.path, self.last, format="png")
+
+
+def render(
+    sim,
+    output: str | os.PathLike,
+    *,
+    frames: int = 90,
+    fps: float = 30.0,
+    size: tuple[int, int] = (640, 480),
+    progress: bool = True,
+    before_frame=None,
+) -> RenderStats:
+    """Run a simulation and write what it looks like.
+
+    Parameters
+    ----------
+    sim : Simulation
+        Advanced by ``1 / fps`` before every frame but the first.
+    output : path
+        ``.gif`` or ``.mp4`` for a movie of every frame, ``.png`` for the
+        last frame.
+    frames : int
+        Number of frames (at least 1).
+    fps : float
+        Frames per second of simulated time and of the movie.
+    size : (int, int)
+        Width and height in pixels.
+    progress : bool
+        Show a progress bar with frame rate and time left.
+    before_frame : callable, optional
+        ``before_frame(sim, n)`` is called before frame ``n`` is advanced,
+        e.g. to move a pin along a scripted path.
+
+    Returns
+    -------
+    RenderStats
+        Output path and per-frame timings of physics, drawing and encoding.
+
+    Raises
+    ------
+    MovieInterrupted
+        If the run stopped early; the message says whether a shorter valid
+        movie was kept.
+
+    Examples
+    --------
+    >>> import pvcloth
+    >>> from pvcloth.movie import render
+    >>> sim = pvcloth.Simulation.from_file("data/scenes/hanging.toml")  # doctest: +SKIP
+    >>> render(sim, "hanging.gif", frames=60)  # doctest: +SKIP
+    """
+    import pyvista as pv
+    from tqdm import tqdm
+
+    from .view import ClothView
+
+    path = Path(output)
+    if path.suffix.lower() not in FORMATS:
+        raise SceneError("output", f"unknown extension {path.suffix!r}; use one of {FORMATS}")
+    if not isinstance(frames, int) or isinstance(frames, bool) or frames < 1:
+        raise SceneError("frames", f"must be a whole number of at least 1, got {frames!r}")
+    if not (isinstance(fps, (int, float)) and 0 < fps <= 1000):
+        raise SceneError("fps", f"must be a number in (0, 1000], got {fps!r}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = path.with_name(f".{path.stem}.partial{path.suffix}")
+    stats = RenderStats(path, 0)
+
+    plotter = pv.Plotter(off_screen=True, window_size=list(size))
+    writer = None
+    try:
+        view = ClothView(sim, plotter)
+        plotter.show(auto_close=False)
+        writer = _FrameWriter(partial, fps)
+        bar = tqdm(range(frames), desc=f"rendering {path.name}", unit="frame", disable=not progress)
+        for n in bar:
+            if before_frame is not None:
+                before_frame(sim, n)
+            t0 = time.perf_counter()
+            if n:
+                sim.advance(1.0 / fps)
+            t1 = time.perf_counter()
+            view.update()
+            plotter.render()
+            image = plotter.screenshot(return_img=True)
+            t2 = time.perf_counter()
+            writer.append(image)
+            t3 = time.perf_counter()
+            stats.physics.append(t1 - t0)
+            stats.drawing.append(t2 - t1)
+            stats.encoding.append(t3 - t2)
+            stats.frames += 1
+            bar.set_postfix_str(f"t={sim.time:.2f}s")
+        t0 = time.perf_counter()
+        writer.close()
+        stats.closing = time.perf_counter() - t0
+        writer = None
+        os.replace(partial, path)
+        return stats
+    except (Exception, KeyboardInterrupt) as error:
+        raise _salvage(writer, partial, path, stats.frames, error) from error
+    finally:
+        plotter.close()
+
+
+def _salvage(writer, partial: Path, path: Path, done: int, error) -> MovieInterrupted:
+    """Close what was written; keep it if it holds a frame, else delete it."""
+    reason = "interrupted" if isinstance(error, KeyboardInterrupt) else str(error)
+    if writer is not None and done > 0:
+        try:
+            writer.close()
+            os.replace(partial, path)
+            return MovieInterrupted(
+                f"stopped after {done} frame(s): {reason}\n"
+                f"kept a valid {path.suffix[1:].upper()} of those frames in {path}",
+                path,
+                done,
+            )
+        except Exception:  # the writer itself failed: keep nothing
+            pass
+    partial.unlink(missing_ok=True)
+    return MovieInterrupted(
+        f"stopped before any frame was finished: {reason}\nno file written", None, done
+    )

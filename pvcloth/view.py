@@ -1,0 +1,139 @@
+"""The view: a PyVista StructuredGrid of the cloth, refreshed from the state.
+
+Rendering reads the simulation; it never changes it. Points are refreshed by
+assignment (``grid.points = x``), which tells VTK they changed, so the mesh is
+added once and smooth shading follows it.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+
+def use_offscreen_gl_if_headless() -> None:
+    """With no X display, ask VTK for an EGL window (software GL via Mesa).
+
+    Without a display VTK would try X and crash; the variable only selects
+    which render window class VTK builds and can still be overridden.
+    """
+    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+
+
+use_offscreen_gl_if_headless()
+
+import pyvista as pv  # noqa: E402  (after the GL choice above)
+
+CLOTH_COLOR = "#c8553d"
+BACK_COLOR = "#b7bfc9"
+
+
+def cloth_grid(positions: np.ndarray, shape: tuple[int, int]) -> pv.StructuredGrid:
+    """A StructuredGrid of dimensions ``(nx, ny, 1)`` whose point ``k`` is
+    ``positions[k]``: the solver's order is VTK's order, no reordering.
+
+    Parameters
+    ----------
+    positions : ndarray, shape (nx * ny, 3)
+    shape : (int, int)
+        ``(nx, ny)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pvcloth.view import cloth_grid
+    >>> grid = cloth_grid(np.random.rand(12, 3), (4, 3))
+    >>> grid.dimensions
+    (4, 3, 1)
+    """
+    nx, ny = shape
+    grid = pv.StructuredGrid()
+    grid.points = np.array(positions, dtype=float)
+    grid.dimensions = (nx, ny, 1)
+    return grid
+
+
+def motion_bounds(sim) -> tuple[float, ...]:
+    """Box the cloth can reach while it swings from its pins: where it starts,
+    that box mirrored through the pins (the far side of the swing), and both
+    moved down the gravity direction by the cloth's size."""
+    x = sim.model.rest_positions
+    low, high = x.min(axis=0), x.max(axis=0)
+    if sim.model.pinned.any() and np.any(sim.scene.gravity):
+        down = np.asarray(sim.scene.gravity) / np.linalg.norm(sim.scene.gravity)
+        shift = max(sim.scene.cloth.size) * down
+        centre = x[sim.model.pinned].mean(axis=0)
+        horizontal = 1.0 - np.abs(down)  # mirror only across gravity
+        mirrored = np.sort(
+            [centre + horizontal * (centre - low), centre + horizontal * (centre - high)], axis=0
+        )
+        low, high = np.minimum(low, mirrored[0]), np.maximum(high, mirrored[1])
+        low, high = np.minimum(low, low + shift), np.maximum(high, high + shift)
+    margin = 0.15 * max(sim.scene.cloth.size)
+    low, high = low - margin, high + margin
+    return (low[0], high[0], low[1], high[1], low[2], high[2])
+
+
+class ClothView:
+    """Draws a simulation's cloth (and its pins) in a PyVista plotter.
+
+    Parameters
+    ----------
+    sim : Simulation
+        The simulation to read from.
+    plotter : pyvista.Plotter
+        Where to draw.
+    show_pins : bool
+        Draw pinned points as small spheres.
+
+    Examples
+    --------
+    >>> import pyvista as pv, pvcloth
+    >>> from pvcloth.view import ClothView
+    >>> sim = pvcloth.Simulation(pvcloth.Scene())
+    >>> plotter = pv.Plotter(off_screen=True)
+    >>> view = ClothView(sim, plotter)
+    >>> sim.advance(1 / 30); view.update()
+    """
+
+    def __init__(self, sim, plotter: pv.Plotter, *, show_pins: bool = True):
+        self.sim = sim
+        self.plotter = plotter
+        self.grid = cloth_grid(sim.positions, sim.shape)
+        plotter.set_background(BACK_COLOR, top="white")
+        self.actor = plotter.add_mesh(
+            self.grid,
+            color=CLOTH_COLOR,
+            smooth_shading=True,
+            specular=0.2,
+            name="cloth",
+        )
+        self.pins = None
+        if show_pins:
+            self.pins = pv.PolyData(np.array(sim.positions[sim.pinned_indices]))
+            plotter.add_points(
+                self.pins,
+                color="#222222",
+                point_size=10,
+                render_points_as_spheres=True,
+                name="pins",
+            )
+        self.reset_camera()
+
+    def reset_camera(self) -> None:
+        """Look at the region the cloth will move through, from the front and
+        a little above, z up."""
+        self.plotter.view_vector((0.9, -1.6, 0.8), viewup=(0, 0, 1))
+        self.plotter.reset_camera(bounds=motion_bounds(self.sim))
+
+    def update(self) -> None:
+        """Copy the simulation's current positions into the drawn meshes."""
+        self.grid.points = self.sim.positions
+        if self.pins is not None:
+            pins = self.sim.positions[self.sim.pinned_indices]
+            if len(pins) == self.pins.n_points:
+                self.pins.points = pins
+            else:  # pins were added or removed: rebuild the small point cloud
+                self.pins.copy_from(pv.PolyData(np.array(pins)))

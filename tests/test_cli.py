@@ -1,0 +1,60 @@
+"""The pvcloth command: info, simulate, and clear errors with exit code 2."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+from conftest import SCENES
+
+from pvcloth.cli import main
+
+
+def test_info_prints_the_model(capsys):
+    assert main(["info", str(SCENES / "hanging.toml")]) == 0
+    out = capsys.readouterr().out
+    assert "particles   1024 (32 x 32)" in out
+    assert "structural 1984, shear 1922, bending 1920" in out
+    assert "pins        2 point(s)" in out
+    assert "stable dt   about" in out and ": ok)" in out
+
+
+def test_info_without_bending_lists_no_bending(tmp_path, capsys):
+    scene = tmp_path / "plain.toml"
+    scene.write_text("[springs.structural]\nstiffness = 100.0\n")
+    assert main(["info", str(scene)]) == 0
+    out = capsys.readouterr().out
+    assert "bending" not in out and "shear" not in out
+
+
+def test_bad_scene_exits_2_with_the_key(tmp_path, capsys):
+    scene = tmp_path / "bad.toml"
+    scene.write_text("[cloth]\nmas = 1.0\n")
+    assert main(["info", str(scene)]) == 2
+    err = capsys.readouterr().err
+    assert "cloth.mas" in err and "did you mean 'mass'" in err
+
+
+def test_divergence_exits_2_with_a_suggestion(capsys):
+    code = main(["simulate", str(SCENES / "hanging.toml"), "--dt", "0.01", "--quiet"])
+    assert code == 2
+    assert "try dt =" in capsys.readouterr().err
+
+
+def test_console_module_runs():
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pvcloth",
+            "simulate",
+            str(SCENES / "hanging.toml"),
+            "--seconds",
+            "0.05",
+            "--quiet",
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert "simulated 0.05 s in 200 steps" in result.stdout
