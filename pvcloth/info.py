@@ -43,12 +43,10 @@ def describe(sim) -> str:
         f"{sim.integrator.description}), dt = {sim.dt:.4g} s"
     )
     stable = sim.stable_dt()
-    if stable is None:
-        lines.append("stable dt   no limit estimated for this integrator")
-    elif stable == 0.0:
+    if stable == 0.0:
         lines.append("stable dt   none: the stiffest mode is undamped and grows at any step")
     elif math.isinf(stable):
-        lines.append("stable dt   unlimited (no stiffness on free points)")
+        lines.append("stable dt   unlimited (stable at any step on the linearised cloth)")
     else:
         verdict = "ok" if sim.dt <= stable else "TOO LARGE: expect divergence"
         share = sim.dt / stable

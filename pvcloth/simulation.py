@@ -93,7 +93,7 @@ class Simulation:
         potential = self.model.potential_energy(self.state.x)
         return {"kinetic": kinetic, "potential": potential, "total": kinetic + potential}
 
-    def stable_dt(self) -> float | None:
+    def stable_dt(self) -> float:
         """The integrator's largest stable step near the current state."""
         return self.integrator.stable_dt(self.model, self.state, self.control)
 

@@ -25,10 +25,6 @@ class Mode:
     omega: float
     alpha: float
 
-    def eigenvalues(self) -> np.ndarray:
-        """The two eigenvalues of the mode as a first-order system."""
-        return np.roots([1.0, 2.0 * self.alpha, self.omega**2]).astype(complex)
-
 
 def stiffest_mode(model, x: np.ndarray, v: np.ndarray, inv_mass: np.ndarray) -> Mode:
     """Stiffest mode of the cloth linearised at ``(x, v)``.

@@ -4,7 +4,13 @@ To add one: write a subclass of :class:`Integrator` in its own module,
 decorate it with :func:`register` and import the module here.
 """
 
-from . import explicit_euler, symplectic_euler  # noqa: F401  (registers them)
+from . import (  # noqa: F401  (importing registers them)
+    explicit_euler,
+    implicit_euler,
+    rk4,
+    symplectic_euler,
+    verlet,
+)
 from .base import INTEGRATORS, Integrator, register
 
 __all__ = ["INTEGRATORS", "Integrator", "get_integrator", "register"]

@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-from ..stability import stiffest_mode
 from ..state import State
-from .base import Integrator, largest_stable_step, register
+from .base import Integrator, register
 
 
 @register
@@ -26,9 +25,3 @@ class ExplicitEuler(Integrator):
         x = state.x + dt * state.v
         v = state.v + dt * a
         return State(x, v, state.t + dt)
-
-    def stable_dt(self, model, state, control):
-        mode = stiffest_mode(model, state.x, state.v, control.inv_mass)
-        if mode.alpha <= 1e-9 * mode.omega:
-            return 0.0  # an undamped oscillation grows at any step
-        return largest_stable_step(mode.eigenvalues(), lambda z: 1.0 + z)

@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
-from ..stability import stiffest_mode
 from ..state import State
 from .base import Integrator, register
 
@@ -30,10 +27,3 @@ class SymplecticEuler(Integrator):
         v = state.v + dt * a
         x = state.x + dt * v
         return State(x, v, state.t + dt)
-
-    def stable_dt(self, model, state, control):
-        mode = stiffest_mode(model, state.x, state.v, control.inv_mass)
-        if mode.omega == 0.0:
-            return math.inf
-        w2, a = mode.omega**2, mode.alpha
-        return 2.0 * (math.sqrt(a * a + w2) - a) / w2

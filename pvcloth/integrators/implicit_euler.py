@@ -1,0 +1,75 @@
+"""Backward Euler linearised once per step (Baraff and Witkin 1998)."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import cg, spsolve
+
+from ..errors import DivergenceError
+from ..state import State
+from .base import Integrator, register
+
+
+@register
+class ImplicitEuler(Integrator):
+    """One Newton step of backward Euler, as in Baraff and Witkin (1998).
+
+    Solves ``(M - h C - h^2 K) dv = h (f + h K v)`` for the velocity change,
+    with ``K = dF/dx`` and ``C = dF/dv`` from the force terms, then
+    ``v' = v + dv`` and ``x' = x + h v'``. Pinned points are left out of the
+    system (their velocity is prescribed). The matrix is symmetric positive
+    definite (the springs' Jacobian drops the destabilising transverse term of
+    compressed springs), so conjugate gradients with a Jacobi preconditioner
+    solve it, warm-started from the previous step's ``dv``; if CG stalls (very
+    stiff or very light cloths), a sparse direct solve takes over.
+
+    Stable at any step on the linearised cloth, at the price of numerical
+    damping that grows with ``h omega``; first order.
+
+    Parameters
+    ----------
+    rtol : float
+        Relative tolerance of the conjugate-gradient solve.
+    """
+
+    name = "implicit_euler"
+    order = 1
+    description = "Baraff-Witkin backward Euler; 1st order, stable at large steps, damps"
+
+    def __init__(self, rtol: float = 1e-8, maxiter: int = 2000):
+        self.rtol = rtol
+        self.maxiter = maxiter
+        self._last_dv: np.ndarray | None = None
+        self.direct_solves = 0  # steps where CG stalled and a factorisation answered
+
+    def step(self, model, state, control, dt):
+        x, v = state.x, state.v
+        f = model.compute_forces(x, v).ravel()
+        dfdx, dfdv = model.jacobians(x, v)
+        free = np.repeat(control.inv_mass > 0, 3)
+        mass = np.repeat(model.mass, 3)
+        system = (sp.diags(mass) - dt * dfdv - dt * dt * dfdx).tocsr()[free][:, free]
+        rhs = dt * (f + dt * (dfdx @ v.ravel()))[free]
+        guess = (
+            self._last_dv if self._last_dv is not None and self._last_dv.size == rhs.size else None
+        )
+        preconditioner = sp.diags(1.0 / system.diagonal())
+        dv_free, info = cg(
+            system, rhs, x0=guess, rtol=self.rtol, maxiter=self.maxiter, M=preconditioner
+        )
+        if info != 0:
+            # Very stiff or very light cloths can stall CG; the matrix is SPD,
+            # so a sparse direct solve always answers (more slowly).
+            self.direct_solves += 1
+            dv_free = spsolve(system.tocsc(), rhs)
+        if not np.all(np.isfinite(dv_free)):
+            raise DivergenceError(
+                f"implicit Euler: the linear solve failed at t = {state.t:.6g} s "
+                f"(dt = {dt:.3g} s); try a smaller dt"
+            )
+        self._last_dv = dv_free
+        dv = np.zeros(3 * model.n_points)
+        dv[free] = dv_free
+        v_new = v + dv.reshape(-1, 3)
+        return State(x + dt * v_new, v_new, state.t + dt)
