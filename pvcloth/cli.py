@@ -13,12 +13,19 @@ def _add_overrides(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", help="scene file (TOML), e.g. data/scenes/hanging.toml")
     parser.add_argument("--integrator", help="override the scene's integrator")
     parser.add_argument("--dt", type=float, help="override the scene's time step (s)")
+    parser.add_argument(
+        "--stability",
+        choices=("refuse", "substep", "ignore"),
+        help="a step above the stable one is refused, split into substeps, or run anyway",
+    )
 
 
 def _simulation(args):
     from .simulation import Simulation
 
-    return Simulation.from_file(args.scene, integrator=args.integrator, dt=args.dt)
+    return Simulation.from_file(
+        args.scene, integrator=args.integrator, dt=args.dt, stability=args.stability
+    )
 
 
 def cmd_info(args) -> None:

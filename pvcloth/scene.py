@@ -182,14 +182,32 @@ class PinSpec:
         )
 
 
+STABILITY_POLICIES = ("refuse", "substep", "ignore")
+
+
 @dataclass(frozen=True)
 class SolverSpec:
-    """Time integration: which integrator and its fixed step in seconds."""
+    """Time integration: which integrator, its fixed step, and what to do
+    when that step is above the integrator's estimated stable step.
+
+    Parameters
+    ----------
+    integrator : str
+        A name from :data:`pvcloth.INTEGRATORS`.
+    dt : float
+        Step in seconds (0 < dt <= 10).
+    stability : {"refuse", "substep", "ignore"}
+        ``"refuse"`` raises a SceneError naming a stable step; ``"substep"``
+        splits each step into equal substeps at most half the stable step;
+        ``"ignore"`` runs as asked (the divergence guard still stops a blow-up).
+    """
 
     integrator: str = "symplectic_euler"
     dt: float = 1e-3
+    stability: str = "refuse"
 
     def __post_init__(self):
+        _set(self, "stability", choice("stability", self.stability, STABILITY_POLICIES))
         _set(self, "integrator", choice("integrator", self.integrator, sorted(INTEGRATORS)))
         _set(self, "dt", real("dt", self.dt, minimum=0.0, exclusive=True, maximum=10.0))
 

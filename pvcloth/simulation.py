@@ -10,9 +10,9 @@ import numpy as np
 from .errors import DivergenceError, SceneError
 from .integrators import get_integrator
 from .model import build_model
-from .scene import Scene, load_scene
+from .scene import STABILITY_POLICIES, Scene, load_scene
 from .state import Control, State
-from .validation import real
+from .validation import choice, real
 
 #: No cloth point moves faster than this (m/s) unless the solver blew up.
 SPEED_LIMIT = 1.0e4
@@ -29,6 +29,14 @@ class Simulation:
         Overrides ``scene.solver.integrator``.
     dt : float, optional
         Overrides ``scene.solver.dt`` (seconds per substep).
+    stability : {"refuse", "substep", "ignore"}, optional
+        Overrides ``scene.solver.stability``: what to do with a step above
+        the integrator's stable step.
+
+    Raises
+    ------
+    SceneError
+        If the step is above the stable step and the policy is ``"refuse"``.
 
     Examples
     --------
@@ -39,14 +47,41 @@ class Simulation:
     ((64, 3), 0.0167)
     """
 
-    def __init__(self, scene: Scene, *, integrator: str | None = None, dt: float | None = None):
+    def __init__(
+        self,
+        scene: Scene,
+        *,
+        integrator: str | None = None,
+        dt: float | None = None,
+        stability: str | None = None,
+    ):
         if not isinstance(scene, Scene):
             raise SceneError("scene", f"expected a pvcloth.Scene, got {type(scene).__name__}")
         self.scene = scene
         self.model = build_model(scene)
         self.integrator = get_integrator(integrator or scene.solver.integrator)
-        self.dt = scene.solver.dt if dt is None else real("dt", dt, minimum=0.0, exclusive=True)
+        requested = scene.solver.dt if dt is None else real("dt", dt, minimum=0.0, exclusive=True)
         self.reset()
+        policy = scene.solver.stability if stability is None else stability
+        policy = choice("stability", policy, STABILITY_POLICIES)
+        self.dt = self._checked_step(requested, policy)
+
+    def _checked_step(self, dt: float, policy: str) -> float:
+        """Apply the scene's stability policy to the requested step."""
+        if policy == "ignore":
+            return dt
+        limit = self.stable_dt()
+        if dt <= limit:
+            return dt
+        if policy == "substep":
+            return dt / math.ceil(dt / (0.5 * limit))
+        raise SceneError(
+            "solver.dt",
+            f"{dt:.4g} s is above the largest stable step of {self.integrator.name} for this "
+            f"cloth, about {limit:.3g} s. Use dt <= {0.5 * limit:.3g}, the implicit_euler "
+            f"integrator (stable at any step), or solver.stability = 'substep' to split "
+            f"each step automatically ('ignore' runs it anyway).",
+        )
 
     @classmethod
     def from_file(cls, path: str | Path, **overrides) -> Simulation:

@@ -26,6 +26,7 @@ def small_scene(
     integrator: str = "symplectic_euler",
     dt: float = 1e-3,
     mass: float = 0.2,
+    stability: str = "refuse",
 ) -> Scene:
     """A 1 m square cloth of ``n x n`` points with all three spring families."""
     return Scene(
@@ -37,7 +38,7 @@ def small_scene(
             bending=SpringSpec(stiffness / 100, damping / 100),
         ),
         pins=PinSpec() if pins is None else pins,
-        solver=SolverSpec(integrator=integrator, dt=dt),
+        solver=SolverSpec(integrator=integrator, dt=dt, stability=stability),
         gravity=gravity,
         air_damping=air_damping,
     )

@@ -35,10 +35,16 @@ def test_bad_scene_exits_2_with_the_key(tmp_path, capsys):
     assert "cloth.mas" in err and "did you mean 'mass'" in err
 
 
-def test_divergence_exits_2_with_a_suggestion(capsys):
-    code = main(["simulate", str(SCENES / "hanging.toml"), "--dt", "0.01", "--quiet"])
+def test_unstable_step_is_refused_substepped_or_run(capsys):
+    scene = str(SCENES / "hanging.toml")
+    assert main(["info", scene, "--dt", "0.01"]) == 2
+    err = capsys.readouterr().err
+    assert "solver.dt: 0.01 s is above the largest stable step" in err and "Use dt <=" in err
+    assert main(["info", scene, "--dt", "0.01", "--stability", "substep"]) == 0
+    assert "dt = 0.0002" in capsys.readouterr().out  # 0.01 split into 50 substeps
+    code = main(["simulate", scene, "--dt", "0.01", "--stability", "ignore", "--quiet"])
     assert code == 2
-    assert "try dt =" in capsys.readouterr().err
+    assert "diverged at t =" in capsys.readouterr().err
 
 
 def test_console_module_runs():

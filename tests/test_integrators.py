@@ -32,7 +32,9 @@ def test_pins_stay_and_nothing_explodes(integrator):
 
 @pytest.mark.parametrize("integrator", ALL)
 def test_free_fall(integrator):
-    scene = small_scene(4, pins=PinSpec(corners=()), integrator=integrator, dt=1e-3)
+    scene = small_scene(
+        4, pins=PinSpec(corners=()), integrator=integrator, dt=1e-3, stability="ignore"
+    )
     sim = Simulation(scene)
     sim.advance(0.5)
     drop = sim.model.rest_positions[:, 2] - sim.positions[:, 2]
@@ -123,7 +125,7 @@ def test_stable_step_estimate_is_sharp_on_a_cloth(integrator):
     kick = 1e-6 * np.random.default_rng(2).standard_normal((64, 3))
     outcomes = []
     for factor in (0.95, 1.05):
-        sim = Simulation(scene, dt=factor * limit)
+        sim = Simulation(scene, dt=factor * limit, stability="ignore")
         sim.state.x += kick
         try:
             sim.advance(3000 * sim.dt)
@@ -155,4 +157,15 @@ def test_implicit_euler_is_bounded_at_a_frame_step(stiffness, mass):
     reach = np.linalg.norm(sim.positions - sim.positions[pinned][0], axis=1).max()
     assert reach < 1.6
     if stiffness >= 1e6 and mass < 1e-3:  # explicit methods could only crawl here
-        assert Simulation(scene, integrator="symplectic_euler").stable_dt() < 1e-3 / 30
+        explicit = Simulation(scene, integrator="symplectic_euler", stability="ignore")
+        assert explicit.stable_dt() < 1e-3 / 30
+
+
+def test_substep_policy_splits_the_step_evenly():
+    scene = small_scene(8, stiffness=400.0, damping=0.1, dt=1 / 60, stability="substep")
+    sim = Simulation(scene)
+    limit = sim.stable_dt()
+    assert sim.dt <= 0.5 * limit
+    assert (1 / 60) / sim.dt == pytest.approx(round((1 / 60) / sim.dt), abs=1e-9)
+    sim.advance(1 / 60)
+    assert sim.time == pytest.approx(1 / 60)
