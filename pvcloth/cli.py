@@ -76,6 +76,35 @@ def cmd_render(args) -> None:
     )
 
 
+def cmd_tradeoff(args) -> None:
+    from pathlib import Path
+
+    from . import tradeoff
+    from .scene import ClothSpec, load_scene
+
+    scene = load_scene(args.scene)
+    if args.resolution:
+        c = scene.cloth
+        cloth = ClothSpec(
+            c.size, (args.resolution, args.resolution), c.mass, c.orientation, c.center
+        )
+        scene = scene.replace(cloth=cloth)
+    integrators = args.integrators.split(",") if args.integrators else None
+    steps = [float(v) for v in args.steps.split(",")] if args.steps else None
+    runs = tradeoff.measure(
+        scene, integrators=integrators, steps=steps, duration=args.duration, progress=not args.quiet
+    )
+    out = Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    tradeoff.write_csv(runs, out / "tradeoff.csv")
+    nx, ny = scene.cloth.resolution
+    tradeoff.plot(
+        runs, out / "tradeoff.png", f"{scene.name}, {nx}x{ny} points, {args.duration:g} s simulated"
+    )
+    print(tradeoff.table(runs))
+    print(f"wrote {out / 'tradeoff.csv'} and {out / 'tradeoff.png'}")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="pvcloth", description="Mass-spring cloth with PyVista.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -99,6 +128,16 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--size", default="640x480", help="WIDTHxHEIGHT (default 640x480)")
     render.add_argument("--quiet", action="store_true", help="no progress bar")
     render.set_defaults(func=cmd_render)
+
+    trade = sub.add_parser("tradeoff", help="error vs wall time for every integrator and step")
+    trade.add_argument("scene", help="scene file (TOML)")
+    trade.add_argument("-o", "--output", required=True, help="folder for tradeoff.csv/.png")
+    trade.add_argument("--duration", type=float, default=0.25, help="simulated s per run")
+    trade.add_argument("--integrators", help="comma-separated names (default: all)")
+    trade.add_argument("--steps", help="comma-separated time steps in s (default: a range)")
+    trade.add_argument("--resolution", type=int, help="points per side instead of the scene's")
+    trade.add_argument("--quiet", action="store_true", help="no progress bar")
+    trade.set_defaults(func=cmd_tradeoff)
     return parser
 
 

@@ -8,12 +8,15 @@ from .base import Integrator, register
 
 @register
 class VelocityVerlet(Integrator):
-    """``v+ = v + h/2 a(x, v)``, ``x' = x + h v+``, ``v' = v+ + h/2 a(x', v+)``.
+    """``v+ = v + h/2 a0``, ``x' = x + h v+``, ``v' = v+ + h/2 a(x', v+ + h/2 a0)``
+    with ``a0 = a(x, v)``.
 
-    Second order and symplectic for position-dependent forces, with the same
-    undamped step limit ``2 / omega`` as symplectic Euler, at two force
-    evaluations per step. Damping forces are evaluated at the half-step
-    velocity, which keeps it explicit.
+    With forces that depend on position only this is exactly velocity Verlet:
+    second order and symplectic, with the undamped step limit ``2 / omega``,
+    at two force evaluations per step. Damping forces in the second kick see
+    the Euler-predicted end-of-step velocity ``v+ + h/2 a0`` (not ``v+``),
+    which keeps the method second order on damped cloth too (measured with
+    ``pvcloth tradeoff``).
     """
 
     name = "verlet"
@@ -22,7 +25,8 @@ class VelocityVerlet(Integrator):
 
     def step(self, model, state, control, dt):
         inv_mass = control.inv_mass[:, None]
-        half = state.v + 0.5 * dt * inv_mass * model.compute_forces(state.x, state.v)
+        kick = 0.5 * dt * inv_mass * model.compute_forces(state.x, state.v)
+        half = state.v + kick
         x = state.x + dt * half
-        v = half + 0.5 * dt * inv_mass * model.compute_forces(x, half)
+        v = half + 0.5 * dt * inv_mass * model.compute_forces(x, half + kick)
         return State(x, v, state.t + dt)

@@ -1,0 +1,202 @@
+"""Speed against accuracy: every integrator over a range of time steps.
+
+Each run simulates the same scene for the same time and is compared with a
+reference run (RK4 at a quarter of the smallest step asked for): the RMS
+distance of the points at the end, the relative difference of total energy
+at the end (the numerical energy drift, since the reference loses only what
+damping takes), the wall time per simulated second, and whether it stayed
+stable. Runs go through :class:`~pvcloth.simulation.Simulation` with
+``stability="ignore"``, so steps above the limit really run and show as
+unstable.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import DivergenceError
+from .integrators import INTEGRATORS
+from .simulation import Simulation
+
+
+@dataclass
+class Run:
+    """One integrator at one step: its error, cost and stability."""
+
+    integrator: str
+    dt: float
+    stable: bool
+    rms_error: float  # m; nan if unstable
+    energy_drift: float  # relative; nan if unstable
+    wall_per_sim_second: float  # s of wall time per s of simulated time
+    steps: int
+
+
+def reference(scene, duration: float, dt: float) -> Simulation:
+    """The fine solution every run is compared with."""
+    sim = Simulation(scene, integrator="rk4", dt=dt, stability="ignore")
+    sim.advance(duration)
+    return sim
+
+
+def default_steps(scene, count: int = 8) -> list[float]:
+    """Steps from 1/16 of symplectic Euler's limit up to a 1/30 s frame."""
+    limit = Simulation(scene, integrator="symplectic_euler", stability="ignore").stable_dt()
+    return [float(dt) for dt in np.geomspace(limit / 16, 1 / 30, count)]
+
+
+def measure(scene, *, integrators=None, steps=None, duration=0.25, progress=True) -> list[Run]:
+    """Run every integrator at every step and compare with the reference.
+
+    Parameters
+    ----------
+    scene : Scene
+    integrators : list of str, optional
+        Default: all registered integrators.
+    steps : list of float, optional
+        Time steps in seconds; default :func:`default_steps`.
+    duration : float
+        Simulated seconds of each run.
+    progress : bool
+        Show a progress bar.
+
+    Returns
+    -------
+    list of Run
+    """
+    from tqdm import tqdm
+
+    integrators = sorted(INTEGRATORS) if integrators is None else list(integrators)
+    steps = default_steps(scene) if steps is None else sorted(steps)
+    # Every run must end exactly at `duration`, or the time mismatch (first
+    # order in dt) would hide every method's true order.
+    steps = sorted({duration / max(1, round(duration / dt)) for dt in steps})
+    truth = reference(scene, duration, duration / (4 * round(duration / min(steps))))
+    x_ref, e_ref = truth.positions, truth.energy()["total"]
+    scale = max(abs(e_ref), truth.model.kinetic_energy(truth.velocities), 1e-12)
+    runs = []
+    jobs = [(name, dt) for name in integrators for dt in steps]
+    for name, dt in tqdm(jobs, desc="trade-off runs", unit="run", disable=not progress):
+        sim = Simulation(scene, integrator=name, dt=dt, stability="ignore")
+        start = time.perf_counter()
+        try:
+            sim.advance(duration)
+            stable = True
+        except DivergenceError:
+            stable = False
+        wall = time.perf_counter() - start
+        if stable:
+            error = float(np.sqrt(np.mean(np.sum((sim.positions - x_ref) ** 2, axis=1))))
+            drift = (sim.energy()["total"] - e_ref) / scale
+        else:
+            error = drift = math.nan
+        runs.append(Run(name, dt, stable, error, drift, wall / max(sim.time, dt), sim.steps))
+    return runs
+
+
+def pareto_front(runs: list[Run]) -> list[Run]:
+    """Stable runs that no other stable run beats in both cost and error."""
+    stable = sorted(
+        (r for r in runs if r.stable), key=lambda r: (r.wall_per_sim_second, r.rms_error)
+    )
+    front, best = [], math.inf
+    for run in stable:
+        if run.rms_error < best:
+            front.append(run)
+            best = run.rms_error
+    return front
+
+
+def write_csv(runs: list[Run], path: Path) -> None:
+    with open(path, "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(asdict(runs[0])))
+        writer.writeheader()
+        for run in runs:
+            writer.writerow(asdict(run))
+
+
+def plot(runs: list[Run], path: Path, title: str) -> None:
+    """Error against cost, one marker per integrator, the Pareto front as a
+    line, unstable runs as crosses along the top."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=110)
+    stable = [r for r in runs if r.stable]
+    ceiling = 3 * max((r.rms_error for r in stable), default=1.0)
+    for n, name in enumerate(sorted({r.integrator for r in runs})):
+        color = f"C{n}"
+        ok = [r for r in stable if r.integrator == name]
+        bad = [r for r in runs if r.integrator == name and not r.stable]
+        ax.plot(
+            [r.wall_per_sim_second for r in ok],
+            [r.rms_error for r in ok],
+            "o-",
+            color=color,
+            label=name,
+            alpha=0.85,
+        )
+        if bad:
+            ax.plot(
+                [r.wall_per_sim_second for r in bad],
+                [ceiling] * len(bad),
+                "x",
+                color=color,
+                markersize=9,
+            )
+    front = pareto_front(runs)
+    ax.step(
+        [r.wall_per_sim_second for r in front],
+        [r.rms_error for r in front],
+        where="post",
+        color="k",
+        lw=2.5,
+        alpha=0.35,
+        label="Pareto front",
+    )
+    ax.axhline(ceiling, color="grey", lw=0.5, ls=":")
+    ax.text(
+        min(r.wall_per_sim_second for r in runs),
+        ceiling,
+        " x = unstable (diverged)",
+        va="bottom",
+        fontsize=8,
+        color="grey",
+    )
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("wall seconds per simulated second (lower is faster)")
+    ax.set_ylabel("RMS point error vs reference (m)")
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8, loc="lower left")
+    ax.grid(True, which="both", alpha=0.2)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def table(runs: list[Run]) -> str:
+    """Plain-text table of the runs, Pareto-optimal ones starred."""
+    front = {id(r) for r in pareto_front(runs)}
+    lines = [
+        f"{'integrator':<17}{'dt (s)':>10}{'stable':>8}{'RMS error (m)':>15}"
+        f"{'energy drift':>14}{'wall/sim s':>12}"
+    ]
+    for r in runs:
+        star = " *" if id(r) in front else ""
+        error = f"{r.rms_error:.3e}" if r.stable else "-"
+        drift = f"{r.energy_drift:+.2e}" if r.stable else "-"
+        lines.append(
+            f"{r.integrator:<17}{r.dt:>10.3g}{'yes' if r.stable else 'NO':>8}"
+            f"{error:>15}{drift:>14}{r.wall_per_sim_second:>12.3g}{star}"
+        )
+    lines.append("* on the Pareto front (no run is both faster and more accurate)")
+    return "\n".join(lines)

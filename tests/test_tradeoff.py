@@ -1,0 +1,78 @@
+"""The speed/accuracy measurement: orders on a damped cloth, unstable runs
+flagged, and the CSV and plot written by the command."""
+
+from __future__ import annotations
+
+import csv
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+from conftest import SCENES, small_scene
+
+from pvcloth import INTEGRATORS, Simulation
+from pvcloth.cli import main
+from pvcloth.tradeoff import measure, pareto_front
+
+
+@pytest.fixture(scope="module")
+def damped_runs():
+    scene = small_scene(6, stiffness=100.0, damping=0.2, air_damping=0.5)
+    limit = Simulation(scene).stable_dt()
+    steps = [limit / 2, limit / 4, limit / 8, 4 * limit]
+    runs = measure(
+        scene,
+        integrators=["symplectic_euler", "verlet", "rk4"],
+        steps=steps,
+        duration=0.3,
+        progress=False,
+    )
+    return runs, limit
+
+
+@pytest.mark.parametrize("integrator", ["symplectic_euler", "verlet", "rk4"])
+def test_orders_hold_on_a_damped_cloth(damped_runs, integrator):
+    runs, _ = damped_runs
+    ok = [r for r in runs if r.integrator == integrator and r.stable]
+    assert len(ok) == 3
+    dts = np.array([r.dt for r in ok])
+    errors = np.array([r.rms_error for r in ok])
+    slope = np.polyfit(np.log(dts), np.log(errors), 1)[0]
+    assert slope == pytest.approx(INTEGRATORS[integrator].order, abs=0.3)
+
+
+def test_steps_far_above_the_limit_are_reported_unstable(damped_runs):
+    runs, limit = damped_runs
+    for run in runs:
+        if run.dt > 3 * limit:
+            assert not run.stable and np.isnan(run.rms_error)
+    front = pareto_front(runs)
+    assert front and all(r.stable for r in front)
+    costs = [r.wall_per_sim_second for r in front]
+    assert costs == sorted(costs)
+
+
+def test_command_writes_csv_plot_and_table(tmp_path, capsys):
+    code = main(
+        [
+            "tradeoff",
+            str(SCENES / "hanging.toml"),
+            "-o",
+            str(tmp_path),
+            "--resolution",
+            "5",
+            "--duration",
+            "0.05",
+            "--integrators",
+            "symplectic_euler,implicit_euler",
+            "--steps",
+            "0.001,0.01",
+            "--quiet",
+        ]
+    )
+    assert code == 0
+    rows = list(csv.DictReader(open(tmp_path / "tradeoff.csv")))
+    assert len(rows) == 4
+    assert {r["integrator"] for r in rows} == {"symplectic_euler", "implicit_euler"}
+    assert iio.imread(tmp_path / "tradeoff.png").ndim == 3
+    assert "Pareto front" in capsys.readouterr().out
