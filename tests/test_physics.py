@@ -66,8 +66,9 @@ def energy_history(integrator, steps, rng):
     return energies
 
 
-def test_symplectic_euler_energy_stays_in_a_band(rng):
-    energies = energy_history("symplectic_euler", 10_000, rng)
+@pytest.mark.parametrize("integrator", ["symplectic_euler", "verlet"])
+def test_symplectic_methods_keep_energy_in_a_band(integrator, rng):
+    energies = energy_history(integrator, 10_000, rng)
     e0 = energies[:200].mean()
     # Symplectic Euler's energy error is O(h omega): about +-10 % at a tenth
     # of its limit, oscillating, never accumulating.
