@@ -76,6 +76,14 @@ def cmd_render(args) -> None:
     )
 
 
+def cmd_export(args) -> None:
+    from .export import export
+
+    sim = _simulation(args)
+    where = export(sim, args.output, frames=args.frames, fps=args.fps, progress=not args.quiet)
+    print(f"wrote {args.frames} frames ({sim.time:.3g} s simulated) to {where}")
+
+
 def cmd_tradeoff(args) -> None:
     from pathlib import Path
 
@@ -128,6 +136,16 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--size", default="640x480", help="WIDTHxHEIGHT (default 640x480)")
     render.add_argument("--quiet", action="store_true", help="no progress bar")
     render.set_defaults(func=cmd_render)
+
+    exp = sub.add_parser(
+        "export", help="write a time series for ParaView (.pvd, .xdmf) or Blender (.obj)"
+    )
+    _add_overrides(exp)
+    exp.add_argument("-o", "--output", required=True, help="OUT.pvd, OUT.xdmf or OUT.obj")
+    exp.add_argument("--frames", type=int, default=60, help="frames (default 60)")
+    exp.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
+    exp.add_argument("--quiet", action="store_true", help="no progress bar")
+    exp.set_defaults(func=cmd_export)
 
     trade = sub.add_parser("tradeoff", help="error vs wall time for every integrator and step")
     trade.add_argument("scene", help="scene file (TOML)")

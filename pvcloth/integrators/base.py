@@ -50,6 +50,14 @@ class Integrator(ABC):
         mode = stiffest_mode(model, state.x, state.v, control.inv_mass)
         return largest_stable_step(type(self), mode.omega, mode.alpha)
 
+    def get_state(self) -> dict[str, np.ndarray]:
+        """Arrays the integrator carries between steps (saved in checkpoints)."""
+        return {}
+
+    def set_state(self, state: dict[str, np.ndarray]) -> None:
+        """Restore what :meth:`get_state` returned (nothing, by default)."""
+        return None
+
     def __repr__(self) -> str:
         return f"{type(self).__name__}()"
 

@@ -43,6 +43,12 @@ class ImplicitEuler(Integrator):
         self._last_dv: np.ndarray | None = None
         self.direct_solves = 0  # steps where CG stalled and a factorisation answered
 
+    def get_state(self):
+        return {} if self._last_dv is None else {"last_dv": self._last_dv.copy()}
+
+    def set_state(self, state):
+        self._last_dv = state.get("last_dv")
+
     def step(self, model, state, control, dt):
         x, v = state.x, state.v
         f = model.compute_forces(x, v).ravel()

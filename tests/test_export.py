@@ -1,0 +1,164 @@
+"""Export to ParaView/Blender formats, read back by real readers; checkpoints
+that resume bit for bit and refuse damaged files."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import SCENES, small_scene
+
+import pvcloth
+from pvcloth import Simulation
+from pvcloth.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
+from pvcloth.cli import main
+from pvcloth.export import ExportInterrupted, export
+
+
+def recorded(frames=4, fps=20):
+    """Positions and times of an uninterrupted run, frame by frame."""
+    sim = Simulation(small_scene(6, damping=0.1, dt=5e-4))
+    out = [(sim.time, sim.positions.copy())]
+    for _ in range(frames - 1):
+        sim.advance(1 / fps)
+        out.append((sim.time, sim.positions.copy()))
+    return out
+
+
+def test_pvd_series_reads_back_in_pyvista_and_meshio(tmp_path):
+    import meshio
+    import pyvista as pv
+
+    path = export(
+        Simulation(small_scene(6, damping=0.1, dt=5e-4)),
+        tmp_path / "cloth.pvd",
+        frames=4,
+        fps=20,
+        progress=False,
+    )
+    expected = recorded()
+    reader = pv.get_reader(path)
+    np.testing.assert_allclose(reader.time_values, [t for t, _ in expected], rtol=1e-12)
+    for n, (_, x) in enumerate(expected):
+        reader.set_active_time_point(n)
+        mesh = reader.read()[0]
+        np.testing.assert_allclose(mesh.points, x, atol=1e-12)
+        vtu = meshio.read(tmp_path / "cloth_frames" / f"cloth_{n:05d}.vtu")
+        np.testing.assert_allclose(vtu.points, x, atol=1e-12)
+    assert np.abs(expected[-1][1] - expected[0][1]).max() > 1e-3  # the points moved
+
+
+def test_xdmf_time_series_round_trip(tmp_path):
+    import meshio
+    import pyvista as pv
+
+    path = export(
+        Simulation(small_scene(6, damping=0.1, dt=5e-4)),
+        tmp_path / "cloth.xdmf",
+        frames=4,
+        fps=20,
+        progress=False,
+    )
+    expected = recorded()
+    with meshio.xdmf.TimeSeriesReader(path) as reader:
+        rest, _ = reader.read_points_cells()
+        assert reader.num_steps == 4
+        for n, (t, x) in enumerate(expected):
+            time, point_data, _ = reader.read_data(n)
+            assert time == pytest.approx(t, rel=1e-12)
+            np.testing.assert_allclose(rest + point_data["displacement"], x, atol=1e-12)
+    # and VTK's own XDMF reader opens it
+    mesh = pv.read(path)
+    block = mesh[0] if isinstance(mesh, pv.MultiBlock) else mesh
+    assert block.n_points == 36 and "displacement" in block.point_data
+
+
+def test_obj_sequence_for_blender(tmp_path):
+    import meshio
+
+    folder = export(
+        Simulation(small_scene(6, damping=0.1, dt=5e-4)),
+        tmp_path / "cloth.obj",
+        frames=3,
+        fps=20,
+        progress=False,
+    )
+    files = sorted(folder.glob("*.obj"))
+    assert len(files) == 3
+    expected = recorded(3)
+    np.testing.assert_allclose(meshio.read(files[-1]).points, expected[-1][1], atol=1e-6)
+
+
+def test_interrupted_export_leaves_a_readable_series(tmp_path):
+    import pyvista as pv
+
+    sim = Simulation(small_scene(8, stiffness=2000.0), dt=2e-3, stability="ignore")
+    with pytest.raises(ExportInterrupted) as caught:
+        export(sim, tmp_path / "broken.pvd", frames=50, fps=30, progress=False)
+    done = caught.value.frames
+    assert done >= 1
+    reader = pv.get_reader(tmp_path / "broken.pvd")
+    assert len(reader.time_values) == done
+    reader.set_active_time_point(done - 1)
+    assert np.isfinite(reader.read()[0].points).all()
+    assert not list(tmp_path.rglob(".*"))  # no temporary files left
+
+
+@pytest.mark.parametrize("integrator", sorted(pvcloth.INTEGRATORS))
+def test_resume_from_checkpoint_is_bit_for_bit(integrator, tmp_path):
+    scene = small_scene(6, damping=0.2, air_damping=0.5, integrator=integrator, dt=5e-4)
+    straight = Simulation(scene)
+    straight.move_pin((5, 5), straight.positions[35] + 0.05)
+    straight.advance(0.0501)
+    straight.advance(0.0499)
+
+    first = Simulation(scene)
+    first.move_pin((5, 5), first.positions[35] + 0.05)
+    first.advance(0.0501)
+    path = save_checkpoint(first, tmp_path / "run.npz")
+    resumed = load_checkpoint(path)
+    resumed.advance(0.0499)
+    np.testing.assert_array_equal(resumed.positions, straight.positions)
+    np.testing.assert_array_equal(resumed.velocities, straight.velocities)
+    assert resumed.time == straight.time and resumed.steps == straight.steps
+
+
+def test_damaged_and_foreign_checkpoints_are_refused(tmp_path):
+    sim = Simulation(small_scene(5))
+    good = save_checkpoint(sim, tmp_path / "good.npz")
+    data = good.read_bytes()
+    damaged = tmp_path / "damaged.npz"
+    damaged.write_bytes(data[: len(data) // 2])
+    foreign = tmp_path / "foreign.npz"
+    np.savez(foreign, x=np.zeros(3))
+    for path, words in (
+        (damaged, "not a readable checkpoint"),
+        (foreign, "not a pvcloth checkpoint"),
+        (tmp_path / "missing.npz", "no checkpoint"),
+    ):
+        with pytest.raises(CheckpointError, match=words):
+            load_checkpoint(path)
+
+
+def test_a_failed_write_keeps_the_previous_checkpoint(tmp_path, monkeypatch):
+    sim = Simulation(small_scene(5))
+    path = save_checkpoint(sim, tmp_path / "run.npz")
+    before = path.read_bytes()
+    sim.advance(0.01)
+
+    def crash(*args, **kwargs):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(np, "savez", crash)
+    with pytest.raises(OSError):
+        save_checkpoint(sim, path)
+    assert path.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["run.npz"]
+
+
+def test_export_command(tmp_path, capsys):
+    out = tmp_path / "hang.pvd"
+    assert (
+        main(["export", str(SCENES / "hammock.toml"), "-o", str(out), "--frames", "3", "--quiet"])
+        == 0
+    )
+    assert out.is_file() and "wrote 3 frames" in capsys.readouterr().out
