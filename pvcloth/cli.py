@@ -76,6 +76,12 @@ def cmd_render(args) -> None:
     )
 
 
+def cmd_run(args) -> None:
+    from .app import ClothApp
+
+    ClothApp(_simulation(args), fps=args.fps).run()
+
+
 def cmd_export(args) -> None:
     from .export import export
 

@@ -178,6 +178,23 @@ class Simulation:
     def pinned_indices(self) -> np.ndarray:
         return np.flatnonzero(self.control.pinned)
 
+    def scale_stiffness(self, factor: float) -> None:
+        """Multiply every spring's stiffness and damping by ``factor`` (> 0),
+        e.g. from a slider; the step is re-checked against the new limit and
+        split into substeps if it became unstable."""
+        factor = real("factor", factor, minimum=0.0, exclusive=True)
+        for springs in self.model.springs:
+            for group in springs.groups:
+                group.stiffness *= factor
+                group.damping *= factor
+        if self.dt > self.stable_dt():
+            self.dt = self._checked_step(self.dt, "substep")
+
+    def set_integrator(self, name: str) -> None:
+        """Switch integrator mid-run; the step is kept if stable, else split."""
+        self.integrator = get_integrator(name)
+        self.dt = self._checked_step(self.scene.solver.dt, "substep")
+
     # -- time stepping ---------------------------------------------------------
 
     def advance(self, seconds: float) -> None:

@@ -1,0 +1,186 @@
+"""The interactive window: the cloth animates in real time and can be dragged.
+
+A plotter timer advances the simulation at the frame rate. Each frame gets a
+wall-time budget for physics; when the physics cannot keep up, the frame
+simulates less time (slow motion, shown in the status line) instead of
+queueing ever more substeps.
+"""
+
+from __future__ import annotations
+
+import time
+
+from .integrators import INTEGRATORS
+from .interaction import ClothDragStyle
+
+KEYS = {
+    "space": "pause / resume",
+    "n": "single step (one frame)",
+    "b": "back to the start",
+    "i": "cycle integrator",
+    "k": "screenshot (pvcloth_NNN.png)",
+    "u": "unpin points pinned by dragging",
+    "q": "quit",
+}
+HELP = "drag the cloth with the left button (Shift+release: leave pinned)\n" + "\n".join(
+    f"{key:>5}: {what}" for key, what in KEYS.items()
+)
+
+
+class ClothApp:
+    """A PyVista window running a simulation that the mouse can drag.
+
+    Parameters
+    ----------
+    sim : Simulation
+    fps : float
+        Target frames per second.
+    physics_share : float
+        Share of a frame's wall time that physics may use before the
+        animation slows down.
+    off_screen : bool
+        Build the window off-screen (for tests and benchmarks).
+    window_size : (int, int)
+
+    Examples
+    --------
+    >>> import pvcloth
+    >>> from pvcloth.app import ClothApp
+    >>> app = ClothApp(pvcloth.Simulation.from_file("data/scenes/hanging.toml"))  # doctest: +SKIP
+    >>> app.run()  # doctest: +SKIP
+    """
+
+    def __init__(
+        self,
+        sim,
+        *,
+        fps: float = 30.0,
+        physics_share: float = 0.6,
+        off_screen: bool = False,
+        window_size=(1024, 768),
+    ):
+        import pyvista as pv
+
+        from .view import ClothView
+
+        self.sim = sim
+        self.fps = fps
+        self.budget = physics_share / fps
+        self.paused = False
+        self.speed = 1.0  # simulated seconds per wall second (1 = real time)
+        self.physics_ms = 0.0
+        self.frame_ms = 0.0
+        self._last_frame = None
+        self._shots = 0
+        self.plotter = pv.Plotter(
+            off_screen=off_screen,
+            window_size=list(window_size),
+            title=f"pvcloth - {sim.scene.name}",
+        )
+        self.view = ClothView(sim, self.plotter)
+        self.style = ClothDragStyle(sim, on_change=self.view.update)
+        self.plotter.iren.style = self.style  # PyVista keeps it through show()
+        self.status = self.plotter.add_text("", position="upper_left", font_size=9)
+        self.plotter.add_text(HELP, position="lower_left", font_size=8)
+        for key, action in (
+            ("space", self.toggle_pause),
+            ("n", self.single_step),
+            ("b", self.restart),
+            ("i", self.cycle_integrator),
+            ("k", self.screenshot),
+            ("u", self.unpin_extras),
+        ):
+            self.plotter.add_key_event(key, action)
+        self._stiffness = 1.0  # the slider calls back once as it is made
+        self.plotter.add_slider_widget(
+            self._set_stiffness,
+            rng=[0.1, 10.0],
+            value=1.0,
+            title="stiffness x",
+            pointa=(0.7, 0.92),
+            pointb=(0.97, 0.92),
+            style="modern",
+            fmt="%.2f",
+        )
+        self._update_status()
+
+    # -- the frame loop --------------------------------------------------------
+
+    def frame(self, *_):
+        """Advance one frame (called by the timer) and redraw."""
+        now = time.perf_counter()
+        if self._last_frame is not None:
+            self.frame_ms = 0.8 * self.frame_ms + 0.2 * 1e3 * (now - self._last_frame)
+        self._last_frame = now
+        if not self.paused:
+            self._advance(self.speed / self.fps)
+        self.view.update()
+        self._update_status()
+        self.plotter.render()
+
+    def _advance(self, seconds: float):
+        start = time.perf_counter()
+        self.sim.advance(seconds)
+        spent = time.perf_counter() - start
+        self.physics_ms = 1e3 * spent
+        # Slow down gracefully: aim the next frame's simulated time at the
+        # physics budget, never above real time, never more than 2x change.
+        if spent > 0:
+            target = self.speed * self.budget / spent
+            self.speed = min(1.0, max(0.5 * self.speed, min(2.0 * self.speed, target)))
+
+    def _update_status(self):
+        fps = 1e3 / self.frame_ms if self.frame_ms else 0.0
+        slow = (
+            "" if self.speed > 0.99 else f"  SLOW MOTION x{self.speed:.2f} (physics cannot keep up)"
+        )
+        state = "PAUSED  " if self.paused else ""
+        self.status.SetText(
+            2,
+            (
+                f"{state}t = {self.sim.time:6.2f} s   {fps:4.1f} fps   "
+                f"physics {self.physics_ms:5.1f} ms"
+                f"   {self.sim.integrator.name}, dt {self.sim.dt:.2g} s{slow}"
+            ),
+        )
+
+    # -- keys and widgets ----------------------------------------------------
+
+    def toggle_pause(self):
+        self.paused = not self.paused
+        self._update_status()
+
+    def single_step(self):
+        self.paused = True
+        self.sim.advance(1.0 / self.fps)
+        self.view.update()
+        self._update_status()
+
+    def restart(self):
+        self.sim.reset()
+        self.view.update()
+
+    def cycle_integrator(self):
+        names = sorted(INTEGRATORS)
+        following = names[(names.index(self.sim.integrator.name) + 1) % len(names)]
+        self.sim.set_integrator(following)
+        self._update_status()
+
+    def screenshot(self):
+        self._shots += 1
+        self.plotter.screenshot(f"pvcloth_{self._shots:03d}.png")
+
+    def unpin_extras(self):
+        self.sim.restore_scene_pins()
+        self.view.update()
+
+    def _set_stiffness(self, value):
+        self.sim.scale_stiffness(value / self._stiffness)
+        self._stiffness = value
+
+    def run(self, max_frames: int = 10**9):
+        """Open the window and animate until it is closed (or ``q``)."""
+        self.plotter.add_timer_event(
+            max_steps=max_frames, duration=int(1000 / self.fps), callback=self.frame
+        )
+        self.plotter.show()
