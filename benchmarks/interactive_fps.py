@@ -26,10 +26,7 @@ def main() -> None:
     base = pvcloth.load_scene(HERE.parent / "data" / "scenes" / "hanging.toml")
     rows = []
     for n in (32, 64):
-        c = base.cloth
-        scene = base.replace(
-            cloth=pvcloth.ClothSpec(c.size, (n, n), c.mass, c.orientation, c.center)
-        )
+        scene = base.with_resolution(n)
         for integrator in ("symplectic_euler", "implicit_euler"):
             dt = 1 / 60 if integrator == "implicit_euler" else None
             sim = pvcloth.Simulation(scene, integrator=integrator, dt=dt, stability="substep")

@@ -32,15 +32,7 @@ def main() -> None:
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for n in (32, 128):
-            scene = base.replace(
-                cloth=pvcloth.ClothSpec(
-                    size=base.cloth.size,
-                    resolution=(n, n),
-                    mass=base.cloth.mass,
-                    orientation=base.cloth.orientation,
-                    center=base.cloth.center,
-                ),
-            )
+            scene = base.with_resolution(n)
             # half the estimated stable step (dashpots make it shrink faster than h)
             dt = 0.5 * pvcloth.Simulation(scene).stable_dt()
             for size in ((640, 480), (1280, 720)):

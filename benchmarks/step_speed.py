@@ -23,8 +23,8 @@ ROUNDS = 7
 
 def simulation(n: int, integrator: str) -> pvcloth.Simulation:
     scene = pvcloth.load_scene(HERE.parent / "data" / "scenes" / "hanging.toml")
-    cloth = pvcloth.ClothSpec(resolution=(n, n), mass=0.2, orientation="horizontal")
-    return pvcloth.Simulation(scene.replace(cloth=cloth), integrator=integrator, dt=1e-5)
+    return pvcloth.Simulation(scene.with_resolution(n), integrator=integrator, dt=1e-5,
+                              stability="ignore")
 
 
 def main() -> None:

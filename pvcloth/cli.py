@@ -94,15 +94,11 @@ def cmd_tradeoff(args) -> None:
     from pathlib import Path
 
     from . import tradeoff
-    from .scene import ClothSpec, load_scene
+    from .scene import load_scene
 
     scene = load_scene(args.scene)
     if args.resolution:
-        c = scene.cloth
-        cloth = ClothSpec(
-            c.size, (args.resolution, args.resolution), c.mass, c.orientation, c.center
-        )
-        scene = scene.replace(cloth=cloth)
+        scene = scene.with_resolution(args.resolution)
     integrators = args.integrators.split(",") if args.integrators else None
     steps = [float(v) for v in args.steps.split(",")] if args.steps else None
     runs = tradeoff.measure(

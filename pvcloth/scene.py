@@ -321,6 +321,12 @@ class Scene:
         """Plain nested dictionaries that :meth:`from_dict` turns back into this scene."""
         return _plain(dataclasses.asdict(self))
 
+    def with_resolution(self, nx: int, ny: int | None = None) -> Scene:
+        """The same scene on an ``nx`` x ``ny`` grid (``ny`` defaults to ``nx``);
+        the per-cloth material makes it the same cloth."""
+        cloth = dataclasses.replace(self.cloth, resolution=(nx, nx if ny is None else ny))
+        return dataclasses.replace(self, cloth=cloth)
+
     def replace(self, **changes) -> Scene:
         """A copy with top-level fields replaced (validated again)."""
         return dataclasses.replace(self, **changes)
