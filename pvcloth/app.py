@@ -157,6 +157,7 @@ class ClothApp:
         self._update_status()
 
     def restart(self):
+        self.style.grabbed = None  # a point held by the mouse is released too
         self.sim.reset()
         self.view.update()
 
