@@ -7,7 +7,16 @@ interaction, export, analysis. See ``docs/architecture.md``.
 from .errors import DivergenceError, PvclothError, SceneError
 from .integrators import INTEGRATORS, Integrator, get_integrator
 from .model import Model, build_model
-from .scene import ClothSpec, PinSpec, Scene, SolverSpec, SpringSpec, SpringsSpec, load_scene
+from .scene import (
+    ClothSpec,
+    PinSpec,
+    Scene,
+    SolverSpec,
+    SpringSpec,
+    SpringsSpec,
+    WindSpec,
+    load_scene,
+)
 from .simulation import Simulation
 from .state import Control, State
 
@@ -30,6 +39,7 @@ __all__ = [
     "SpringSpec",
     "SpringsSpec",
     "State",
+    "WindSpec",
     "build_model",
     "get_integrator",
     "load_scene",

@@ -225,3 +225,57 @@ def pair_blocks(ia, ib, blocks, n_points) -> sp.csr_matrix:
     return sp.csr_matrix(
         (np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))), shape=(size, size)
     )
+
+
+@dataclass
+class Wind:
+    """Aerodynamic drag of steady wind on each triangle of the cloth.
+
+    Each grid cell is split into two triangles. On a triangle of area ``A``
+    and unit normal ``n``, with ``u`` the air velocity minus the triangle's
+    mean velocity, the force is ``1/2 rho C_d A |u| (u . n) n``: only the
+    component of the relative wind across the surface pushes it, and a
+    triangle moving with the air feels nothing. A third of it goes to each
+    corner. Triangle corners are strided views of the grid, so no scatter.
+    The term gives no Jacobian: implicit integrators treat it explicitly.
+    """
+
+    velocity: np.ndarray  # air velocity (m/s)
+    drag: float  # C_d
+    density: float  # rho (kg/m^3)
+    shape: tuple[int, int]  # (ny, nx)
+    name: str = "wind"
+
+    #: The two triangles of cell (i, j), as (row, column) offsets of corners.
+    TRIANGLES = (((0, 0), (0, 1), (1, 1)), ((0, 0), (1, 1), (1, 0)))
+
+    def _corners(self, a3, triangle):
+        ny, nx = self.shape
+        return [a3[dj : ny - 1 + dj, di : nx - 1 + di] for dj, di in triangle]
+
+    def accumulate(self, x, v, f) -> None:
+        x3, v3, f3 = (arr.reshape(self.shape + (3,)) for arr in (x, v, f))
+        for triangle in self.TRIANGLES:
+            p0, p1, p2 = self._corners(x3, triangle)
+            normal = np.cross(p1 - p0, p2 - p0)  # length = 2 * area
+            double_area = np.sqrt(np.einsum("...k,...k->...", normal, normal))
+            unit = normal / np.maximum(double_area, TINY_LENGTH)[..., None]
+            q0, q1, q2 = self._corners(v3, triangle)
+            relative = self.velocity - (q0 + q1 + q2) / 3.0
+            across = np.einsum("...k,...k->...", relative, unit)
+            speed = np.sqrt(np.einsum("...k,...k->...", relative, relative))
+            scale = 0.5 * self.density * self.drag * (0.5 * double_area) * speed * across / 3.0
+            share = scale[..., None] * unit
+            for corner in self._corners(f3, triangle):
+                corner += share
+
+    def potential_energy(self, x) -> float:
+        return 0.0
+
+    def jacobians(self, x, v):
+        return None, None
+
+    def describe(self) -> str:
+        return "wind ({:g}, {:g}, {:g}) m/s, drag coefficient {:g}".format(
+            *self.velocity, self.drag
+        )

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .forces import AirDamping, Gravity, Springs
+from .forces import AirDamping, Gravity, Springs, Wind
 from .grid import initial_positions, lumped_masses
 
 
@@ -143,4 +143,7 @@ def build_model(scene) -> Model:
         forces.append(Gravity(np.asarray(scene.gravity, dtype=float), mass))
     if scene.air_damping > 0:
         forces.append(AirDamping(scene.air_damping, mass))
+    if scene.wind is not None and scene.wind.drag > 0:
+        w = scene.wind
+        forces.append(Wind(np.asarray(w.velocity, dtype=float), w.drag, w.density, (ny, nx)))
     return Model((ny, nx), x.reshape(-1, 3).copy(), mass, pinned_mask(scene), forces)

@@ -213,6 +213,27 @@ class SolverSpec:
 
 
 @dataclass(frozen=True)
+class WindSpec:
+    """Steady wind: air velocity (m/s), drag coefficient and air density.
+
+    Examples
+    --------
+    >>> from pvcloth import WindSpec
+    >>> WindSpec(velocity=(8.0, 2.0, 0.0)).drag
+    1.0
+    """
+
+    velocity: tuple[float, float, float] = (5.0, 0.0, 0.0)
+    drag: float = 1.0
+    density: float = 1.2
+
+    def __post_init__(self):
+        _set(self, "velocity", vector("velocity", self.velocity, 3))
+        _set(self, "drag", real("drag", self.drag, minimum=0.0))
+        _set(self, "density", real("density", self.density, minimum=0.0, exclusive=True))
+
+
+@dataclass(frozen=True)
 class Scene:
     """A complete, validated description of a cloth simulation.
 
@@ -234,6 +255,8 @@ class Scene:
     air_damping : float
         Linear drag on each point's absolute velocity, in 1/s (force
         ``-air_damping * m * v``). Zero builds no drag term.
+    wind : WindSpec, optional
+        Steady wind; ``None`` (the default) builds no wind term.
 
     Examples
     --------
@@ -250,6 +273,7 @@ class Scene:
     solver: SolverSpec = field(default_factory=SolverSpec)
     gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
     air_damping: float = 0.0
+    wind: WindSpec | None = None
 
     def __post_init__(self):
         if not isinstance(self.name, str):
@@ -263,6 +287,8 @@ class Scene:
                 )
         _set(self, "gravity", vector("gravity", self.gravity, 3))
         _set(self, "air_damping", real("air_damping", self.air_damping, minimum=0.0))
+        if self.wind is not None and not isinstance(self.wind, WindSpec):
+            raise SceneError("wind", f"expected a WindSpec or None, got {type(self.wind).__name__}")
         self._check_pins_fit()
 
     def _check_pins_fit(self) -> None:
@@ -311,6 +337,8 @@ class Scene:
         for key, value in data.items():
             if key == "springs":
                 kwargs[key] = _springs_from_dict(value)
+            elif key == "wind":
+                kwargs[key] = _spec_from_dict(WindSpec, value, key)
             elif key in _NESTED:
                 kwargs[key] = _spec_from_dict(_NESTED[key], value, key)
             else:

@@ -272,7 +272,7 @@ def test_divergence_stops_with_a_helpful_error():
     assert np.isfinite(sim.positions).all()  # left at the last good step
 
 
-@pytest.mark.parametrize("name", ["hanging", "curtain", "hammock", "banner"])
+@pytest.mark.parametrize("name", ["hanging", "curtain", "hammock", "banner", "flag"])
 def test_bundled_scene_runs_stably_with_pins_in_place(name, scenes_dir):
     sim = Simulation.from_file(scenes_dir / f"{name}.toml")
     assert sim.dt < sim.stable_dt()
