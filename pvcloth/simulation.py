@@ -60,11 +60,14 @@ class Simulation:
         self.scene = scene
         self.model = build_model(scene)
         self.integrator = get_integrator(integrator or scene.solver.integrator)
-        requested = scene.solver.dt if dt is None else real("dt", dt, minimum=0.0, exclusive=True)
+        #: The step asked for (scene or override); ``dt`` may be a substep of it.
+        self.requested_dt = (
+            scene.solver.dt if dt is None else real("dt", dt, minimum=0.0, exclusive=True)
+        )
         self.reset()
         policy = scene.solver.stability if stability is None else stability
         policy = choice("stability", policy, STABILITY_POLICIES)
-        self.dt = self._checked_step(requested, policy)
+        self.dt = self._checked_step(self.requested_dt, policy)
 
     def _checked_step(self, dt: float, policy: str) -> float:
         """Apply the scene's stability policy to the requested step."""
@@ -191,9 +194,10 @@ class Simulation:
             self.dt = self._checked_step(self.dt, "substep")
 
     def set_integrator(self, name: str) -> None:
-        """Switch integrator mid-run; the step is kept if stable, else split."""
+        """Switch integrator mid-run; the step asked for is kept if stable,
+        else split into substeps."""
         self.integrator = get_integrator(name)
-        self.dt = self._checked_step(self.scene.solver.dt, "substep")
+        self.dt = self._checked_step(self.requested_dt, "substep")
 
     # -- time stepping ---------------------------------------------------------
 

@@ -169,3 +169,11 @@ def test_substep_policy_splits_the_step_evenly():
     assert (1 / 60) / sim.dt == pytest.approx(round((1 / 60) / sim.dt), abs=1e-9)
     sim.advance(1 / 60)
     assert sim.time == pytest.approx(1 / 60)
+
+
+def test_switching_integrator_keeps_the_step_asked_for():
+    sim = Simulation(small_scene(8, damping=0.1, dt=1e-3), dt=2e-4)
+    sim.set_integrator("verlet")
+    assert sim.integrator.name == "verlet" and sim.dt == 2e-4  # not the scene's 1e-3
+    sim.set_integrator("implicit_euler")
+    assert sim.dt == 2e-4
