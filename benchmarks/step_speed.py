@@ -23,8 +23,9 @@ ROUNDS = 7
 
 def simulation(n: int, integrator: str) -> pvcloth.Simulation:
     scene = pvcloth.load_scene(HERE.parent / "data" / "scenes" / "hanging.toml")
-    return pvcloth.Simulation(scene.with_resolution(n), integrator=integrator, dt=1e-5,
-                              stability="ignore")
+    return pvcloth.Simulation(
+        scene.with_resolution(n), integrator=integrator, dt=1e-5, stability="ignore"
+    )
 
 
 def main() -> None:

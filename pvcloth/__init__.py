@@ -9,6 +9,7 @@ from .integrators import INTEGRATORS, Integrator, get_integrator
 from .model import Model, build_model
 from .scene import (
     ClothSpec,
+    ObstacleSpec,
     PinSpec,
     Scene,
     SolverSpec,
@@ -30,6 +31,7 @@ __all__ = [
     "DivergenceError",
     "Integrator",
     "Model",
+    "ObstacleSpec",
     "PinSpec",
     "PvclothError",
     "Scene",

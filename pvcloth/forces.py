@@ -15,6 +15,7 @@ Every term offers:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -229,25 +230,70 @@ def pair_blocks(ia, ib, blocks, n_points) -> sp.csr_matrix:
 
 @dataclass
 class Wind:
-    """Aerodynamic drag of steady wind on each triangle of the cloth.
+    """Aerodynamic drag and lift of (possibly gusty) wind on each triangle.
 
     Each grid cell is split into two triangles. On a triangle of area ``A``
     and unit normal ``n``, with ``u`` the air velocity minus the triangle's
-    mean velocity, the force is ``1/2 rho C_d A |u| (u . n) n``: only the
+    mean velocity, drag is ``1/2 rho C_d A |u| (u . n) n``: only the
     component of the relative wind across the surface pushes it, and a
-    triangle moving with the air feels nothing. A third of it goes to each
-    corner. Triangle corners are strided views of the grid, so no scatter.
-    The term gives no Jacobian: implicit integrators treat it explicitly.
+    triangle moving with the air feels nothing. Lift is
+    ``1/2 rho C_l A |u| (u . n) (n - (n . u_hat) u_hat)``: perpendicular to
+    the relative wind, of size ``1/2 rho C_l A |u|^2 sin(a) cos(a)`` at angle
+    of attack ``a`` (a flat plate's lift, zero both edge-on and face-on). A
+    third of the force goes to each corner. Triangle corners are strided views
+    of the grid, so no scatter. The term gives no Jacobian: implicit
+    integrators treat it explicitly.
+
+    Gusts scale the wind speed by ``1 + gust * g(t)``, where ``g`` takes
+    independent uniform values in ``[-1, 1]`` every ``gust_period`` seconds
+    (each drawn from its own seeded generator, so the value at a time does not
+    depend on the order of calls) joined by a smooth cosine ramp.
     """
 
-    velocity: np.ndarray  # air velocity (m/s)
+    mean_velocity: np.ndarray  # air velocity without gusts (m/s)
     drag: float  # C_d
     density: float  # rho (kg/m^3)
     shape: tuple[int, int]  # (ny, nx)
+    lift: float = 0.0  # C_l
+    gust: float = 0.0
+    gust_period: float = 0.5
+    seed: int = 0
     name: str = "wind"
 
     #: The two triangles of cell (i, j), as (row, column) offsets of corners.
     TRIANGLES = (((0, 0), (0, 1), (1, 1)), ((0, 0), (1, 1), (1, 0)))
+
+    def __post_init__(self):
+        self.velocity = np.array(self.mean_velocity, dtype=float)
+
+    @classmethod
+    def from_spec(cls, spec, shape) -> Wind:
+        """The term a :class:`~pvcloth.scene.WindSpec` describes."""
+        return cls(
+            np.asarray(spec.velocity, dtype=float),
+            spec.drag,
+            spec.density,
+            shape,
+            lift=spec.lift,
+            gust=spec.gust,
+            gust_period=spec.gust_period,
+            seed=spec.seed,
+        )
+
+    def gust_factor(self, t: float) -> float:
+        """Wind speed at time ``t`` relative to the mean."""
+        if self.gust == 0.0:
+            return 1.0
+        phase = t / self.gust_period
+        k = math.floor(phase)
+        a, b = (np.random.default_rng([self.seed, k + n]).uniform(-1.0, 1.0) for n in (0, 1))
+        blend = 0.5 - 0.5 * math.cos(math.pi * (phase - k))
+        return 1.0 + self.gust * float(a + (b - a) * blend)
+
+    def set_time(self, t: float) -> None:
+        """Use the wind of time ``t`` until told otherwise."""
+        if self.gust:
+            self.velocity = self.mean_velocity * self.gust_factor(t)
 
     def _corners(self, a3, triangle):
         ny, nx = self.shape
@@ -264,8 +310,14 @@ class Wind:
             relative = self.velocity - (q0 + q1 + q2) / 3.0
             across = np.einsum("...k,...k->...", relative, unit)
             speed = np.sqrt(np.einsum("...k,...k->...", relative, relative))
-            scale = 0.5 * self.density * self.drag * (0.5 * double_area) * speed * across / 3.0
-            share = scale[..., None] * unit
+            # 1/2 rho A |u| (u . n), shared by three corners.
+            scale = 0.5 * self.density * (0.5 * double_area) * speed * across / 3.0
+            share = (self.drag * scale)[..., None] * unit
+            if self.lift:
+                # n minus its part along the wind: |.| = cos(angle of attack).
+                along = across / np.maximum(speed, TINY_LENGTH)
+                wind_dir = relative / np.maximum(speed, TINY_LENGTH)[..., None]
+                share += (self.lift * scale)[..., None] * (unit - along[..., None] * wind_dir)
             for corner in self._corners(f3, triangle):
                 corner += share
 
@@ -276,6 +328,13 @@ class Wind:
         return None, None
 
     def describe(self) -> str:
-        return "wind ({:g}, {:g}, {:g}) m/s, drag coefficient {:g}".format(
-            *self.velocity, self.drag
+        text = "wind ({:g}, {:g}, {:g}) m/s, drag coefficient {:g}".format(
+            *self.mean_velocity, self.drag
         )
+        if self.lift:
+            text += f", lift coefficient {self.lift:g}"
+        if self.gust:
+            text += (
+                f", gusts +/-{100 * self.gust:g} % every {self.gust_period:g} s (seed {self.seed})"
+            )
+        return text

@@ -34,6 +34,10 @@ def describe(sim) -> str:
         + f" ({sum(s.count for s in springs)} in all)"
     )
     lines.append("forces      " + ("; ".join(t.describe() for t in model.forces) or "none"))
+    lines.append(
+        "obstacles   "
+        + ("; ".join(o.describe() for o in model.obstacles) or "none (no collision code runs)")
+    )
     pinned = np.flatnonzero(sim.control.pinned)
     shown = ", ".join(f"({k % nx}, {k // nx})" for k in pinned[:6])
     more = f" and {pinned.size - 6} more" if pinned.size > 6 else ""

@@ -13,6 +13,7 @@ import numpy as np
 
 from .forces import AirDamping, Gravity, Springs, Wind
 from .grid import initial_positions, lumped_masses
+from .obstacles import build_obstacle
 
 
 @dataclass
@@ -31,6 +32,9 @@ class Model:
         Points pinned by the scene.
     forces : list
         Force terms (see :mod:`pvcloth.forces`), only those the scene needs.
+    obstacles : list
+        Rigid obstacles (see :mod:`pvcloth.obstacles`); empty if the scene
+        has none, and then no collision code runs.
     """
 
     shape: tuple[int, int]
@@ -38,6 +42,7 @@ class Model:
     mass: np.ndarray
     pinned: np.ndarray
     forces: list = field(default_factory=list)
+    obstacles: list = field(default_factory=list)
 
     @property
     def n_points(self) -> int:
@@ -56,6 +61,20 @@ class Model:
         for term in self.forces:
             term.accumulate(x, v, f)
         return f
+
+    def set_time(self, t: float) -> None:
+        """Tell time-dependent terms (gusty wind) the time of the coming step."""
+        for term in self.forces:
+            if hasattr(term, "set_time"):
+                term.set_time(t)
+
+    def collide(self, x0, x1, v1, movable, t0: float, t1: float) -> int:
+        """Resolve collisions of the step ``t0 -> t1`` in place on ``x1``, ``v1``
+        for the ``movable`` point indices; returns how many points touched."""
+        touched = 0
+        for obstacle in self.obstacles:
+            touched += obstacle.collide(x0, x1, v1, movable, t0, t1).index.size
+        return touched
 
     def potential_energy(self, x: np.ndarray) -> float:
         return sum(term.potential_energy(x) for term in self.forces)
@@ -143,7 +162,8 @@ def build_model(scene) -> Model:
         forces.append(Gravity(np.asarray(scene.gravity, dtype=float), mass))
     if scene.air_damping > 0:
         forces.append(AirDamping(scene.air_damping, mass))
-    if scene.wind is not None and scene.wind.drag > 0:
+    if scene.wind is not None and (scene.wind.drag > 0 or scene.wind.lift > 0):
         w = scene.wind
-        forces.append(Wind(np.asarray(w.velocity, dtype=float), w.drag, w.density, (ny, nx)))
-    return Model((ny, nx), x.reshape(-1, 3).copy(), mass, pinned_mask(scene), forces)
+        forces.append(Wind.from_spec(w, (ny, nx)))
+    obstacles = [build_obstacle(spec) for spec in scene.obstacles]
+    return Model((ny, nx), x.reshape(-1, 3).copy(), mass, pinned_mask(scene), forces, obstacles)

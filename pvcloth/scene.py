@@ -214,7 +214,27 @@ class SolverSpec:
 
 @dataclass(frozen=True)
 class WindSpec:
-    """Steady wind: air velocity (m/s), drag coefficient and air density.
+    """Wind: air velocity (m/s), drag and lift coefficients, air density, and
+    optional gusts.
+
+    Parameters
+    ----------
+    velocity : (float, float, float)
+        Mean air velocity in m/s.
+    drag : float
+        Drag coefficient ``C_d`` (>= 0): force along the triangle's normal.
+    lift : float
+        Lift coefficient ``C_l`` (>= 0): force across the relative wind, in
+        the plane of wind and normal; zero (the default) builds no lift.
+    density : float
+        Air density in kg/m^3.
+    gust : float
+        Relative gust strength (0 to 1): the wind speed varies between
+        ``1 - gust`` and ``1 + gust`` times the mean. Zero means steady.
+    gust_period : float
+        Seconds between independent gust values (smoothly interpolated).
+    seed : int
+        Seed of the gust sequence: the same seed gives the same gusts.
 
     Examples
     --------
@@ -225,12 +245,120 @@ class WindSpec:
 
     velocity: tuple[float, float, float] = (5.0, 0.0, 0.0)
     drag: float = 1.0
+    lift: float = 0.0
     density: float = 1.2
+    gust: float = 0.0
+    gust_period: float = 0.5
+    seed: int = 0
 
     def __post_init__(self):
         _set(self, "velocity", vector("velocity", self.velocity, 3))
         _set(self, "drag", real("drag", self.drag, minimum=0.0))
+        _set(self, "lift", real("lift", self.lift, minimum=0.0))
         _set(self, "density", real("density", self.density, minimum=0.0, exclusive=True))
+        _set(self, "gust", real("gust", self.gust, minimum=0.0, maximum=1.0))
+        _set(
+            self, "gust_period", real("gust_period", self.gust_period, minimum=0.0, exclusive=True)
+        )
+        _set(self, "seed", integer("seed", self.seed, minimum=0, maximum=2**63 - 1))
+
+
+OBSTACLE_TYPES = ("sphere", "box", "ground")
+#: Keys each obstacle type uses besides the common ones.
+_OBSTACLE_KEYS = {"sphere": ("radius",), "box": ("size", "rotation"), "ground": ("normal",)}
+
+
+@dataclass(frozen=True)
+class ObstacleSpec:
+    """A rigid obstacle the cloth collides with: sphere, box or ground plane.
+
+    Parameters
+    ----------
+    type : {"sphere", "box", "ground"}
+    center : (float, float, float)
+        Sphere or box centre; for the ground, a point on the plane.
+    radius : float
+        Sphere radius in metres (> 0). Sphere only.
+    size : (float, float, float)
+        Box edge lengths along its own axes (each > 0). Box only.
+    rotation : (float, float, float)
+        Box orientation: rotations in degrees about the fixed x, y and z
+        axes, applied in that order. Box only.
+    normal : (float, float, float)
+        Ground plane normal (any length but zero), pointing to the free side.
+        Ground only; default straight up.
+    thickness : float
+        Distance (m) the cloth keeps from the surface (>= 0).
+    friction : float
+        Kinetic Coulomb friction coefficient (>= 0).
+    static_friction : float, optional
+        Static coefficient (>= ``friction``); defaults to ``friction``.
+    path : list of (t, x, y, z)
+        Optional key frames of the centre, in increasing time; the obstacle
+        moves in straight lines between them and rests before the first and
+        after the last.
+
+    Examples
+    --------
+    >>> from pvcloth import ObstacleSpec
+    >>> ObstacleSpec("sphere", center=(0, 0, 0.5), radius=0.3).friction
+    0.3
+    """
+
+    type: str
+    center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    radius: float | None = None
+    size: tuple[float, float, float] | None = None
+    rotation: tuple[float, float, float] | None = None
+    normal: tuple[float, float, float] | None = None
+    thickness: float = 0.005
+    friction: float = 0.3
+    static_friction: float | None = None
+    path: tuple[tuple[float, float, float, float], ...] = ()
+
+    def __post_init__(self):
+        kind = choice("type", self.type, OBSTACLE_TYPES)
+        for other, keys in _OBSTACLE_KEYS.items():
+            for key in keys:
+                if other != kind and getattr(self, key) is not None:
+                    raise SceneError(key, f"is not used by a {kind}; it belongs to a {other}")
+        _set(self, "center", vector("center", self.center, 3))
+        if kind == "sphere":
+            if self.radius is None:
+                raise SceneError("radius", "a sphere needs a radius (metres, > 0)")
+            _set(self, "radius", real("radius", self.radius, minimum=0.0, exclusive=True))
+        elif kind == "box":
+            if self.size is None:
+                raise SceneError("size", "a box needs size = [x, y, z] (metres, each > 0)")
+            _set(self, "size", vector("size", self.size, 3, minimum=0.0, exclusive=True))
+            rotation = (0.0, 0.0, 0.0) if self.rotation is None else self.rotation
+            _set(self, "rotation", vector("rotation", rotation, 3))
+        else:
+            normal = vector("normal", (0.0, 0.0, 1.0) if self.normal is None else self.normal, 3)
+            if not any(normal):
+                raise SceneError("normal", "must not be zero; give the direction of the free side")
+            _set(self, "normal", normal)
+        _set(self, "thickness", real("thickness", self.thickness, minimum=0.0))
+        _set(self, "friction", real("friction", self.friction, minimum=0.0))
+        static = self.friction if self.static_friction is None else self.static_friction
+        static = real("static_friction", static, minimum=0.0)
+        if static < self.friction:
+            raise SceneError(
+                "static_friction",
+                f"{static:g} is below the kinetic friction {self.friction:g}; "
+                "static friction must be at least the kinetic one",
+            )
+        _set(self, "static_friction", static)
+        frames = []
+        for n, frame in enumerate(sequence("path", self.path)):
+            frames.append(vector(f"path[{n}]", frame, 4))
+            if n and frames[-1][0] <= frames[-2][0]:
+                raise SceneError(
+                    f"path[{n}]",
+                    f"time {frames[-1][0]:g} s does not come after {frames[-2][0]:g} s; "
+                    "key frames must be in increasing time",
+                )
+        _set(self, "path", tuple(frames))
 
 
 @dataclass(frozen=True)
@@ -256,7 +384,10 @@ class Scene:
         Linear drag on each point's absolute velocity, in 1/s (force
         ``-air_damping * m * v``). Zero builds no drag term.
     wind : WindSpec, optional
-        Steady wind; ``None`` (the default) builds no wind term.
+        Wind; ``None`` (the default) builds no wind term.
+    obstacles : tuple of ObstacleSpec
+        Spheres, boxes and ground planes; none by default (and then no
+        collision code runs).
 
     Examples
     --------
@@ -274,6 +405,7 @@ class Scene:
     gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
     air_damping: float = 0.0
     wind: WindSpec | None = None
+    obstacles: tuple[ObstacleSpec, ...] = ()
 
     def __post_init__(self):
         if not isinstance(self.name, str):
@@ -289,6 +421,14 @@ class Scene:
         _set(self, "air_damping", real("air_damping", self.air_damping, minimum=0.0))
         if self.wind is not None and not isinstance(self.wind, WindSpec):
             raise SceneError("wind", f"expected a WindSpec or None, got {type(self.wind).__name__}")
+        obstacles = sequence("obstacles", self.obstacles)
+        for n, obstacle in enumerate(obstacles):
+            if not isinstance(obstacle, ObstacleSpec):
+                raise SceneError(
+                    f"obstacles[{n}]",
+                    f"expected an ObstacleSpec, got {type(obstacle).__name__}",
+                )
+        _set(self, "obstacles", tuple(obstacles))
         self._check_pins_fit()
 
     def _check_pins_fit(self) -> None:
@@ -339,6 +479,11 @@ class Scene:
                 kwargs[key] = _springs_from_dict(value)
             elif key == "wind":
                 kwargs[key] = _spec_from_dict(WindSpec, value, key)
+            elif key == "obstacles":
+                kwargs[key] = tuple(
+                    _spec_from_dict(ObstacleSpec, item, f"obstacles[{n}]")
+                    for n, item in enumerate(sequence(key, value))
+                )
             elif key in _NESTED:
                 kwargs[key] = _spec_from_dict(_NESTED[key], value, key)
             else:

@@ -239,11 +239,16 @@ class Simulation:
         # their velocity: the one that lands them on their target.
         pin_velocity = (pin_positions - state.x[pinned]) / dt
         state.v[pinned] = pin_velocity
+        model = self.model
+        model.set_time(state.t)
         with np.errstate(all="ignore"):
-            new = self.integrator.step(self.model, state, self.control, dt)
+            new = self.integrator.step(model, state, self.control, dt)
+            new.t = (self.steps + 1) * dt if self._uniform_clock(state) else state.t + dt
+            if model.obstacles:
+                movable = np.flatnonzero(~self.control.pinned)
+                model.collide(state.x, new.x, new.v, movable, state.t, new.t)
         new.x[pinned] = pin_positions
         new.v[pinned] = pin_velocity
-        new.t = (self.steps + 1) * dt if self._uniform_clock(state) else state.t + dt
         speed = np.abs(new.v).max(initial=0.0)
         if not speed <= SPEED_LIMIT or not np.isfinite(new.x).all():
             raise DivergenceError(self._divergence_message(speed))

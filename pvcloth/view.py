@@ -28,6 +28,28 @@ import pyvista as pv  # noqa: E402  (after the GL choice above)
 
 CLOTH_COLOR = "#c8553d"
 BACK_COLOR = "#b7bfc9"
+OBSTACLE_COLOR = "#8fa3b8"
+GROUND_COLOR = "#d9d4c7"
+
+
+def obstacle_mesh(obstacle, extent: float) -> pv.PolyData:
+    """A surface of the obstacle in its own frame (the actor's matrix places it).
+
+    The ground is drawn as a square of side ``extent`` around its point.
+    """
+    if obstacle.name == "sphere":
+        return pv.Sphere(radius=obstacle.radius, theta_resolution=48, phi_resolution=32)
+    if obstacle.name == "box":
+        return pv.Box(bounds=np.column_stack([-0.5 * obstacle.size, 0.5 * obstacle.size]).ravel())
+    return pv.Plane(i_size=extent, j_size=extent, i_resolution=1, j_resolution=1)
+
+
+def obstacle_matrix(obstacle, t: float) -> np.ndarray:
+    """4x4 matrix from the obstacle's frame to the world at time ``t``."""
+    matrix = np.eye(4)
+    matrix[:3, :3] = obstacle.axes
+    matrix[:3, 3] = obstacle.center_at(t)
+    return matrix
 
 
 def cloth_grid(positions: np.ndarray, shape: tuple[int, int]) -> pv.StructuredGrid:
@@ -71,6 +93,14 @@ def motion_bounds(sim) -> tuple[float, ...]:
         )
         low, high = np.minimum(low, mirrored[0]), np.maximum(high, mirrored[1])
         low, high = np.minimum(low, low + shift), np.maximum(high, high + shift)
+    for obstacle in sim.model.obstacles:
+        if obstacle.name == "ground":  # only the height of its point: it is unbounded
+            corner = [obstacle.center_at(sim.time)] * 2
+        else:
+            grown = obstacle.bounds()[1] - obstacle.thickness
+            radius = np.linalg.norm(grown)
+            corner = [obstacle.center_at(sim.time) - radius, obstacle.center_at(sim.time) + radius]
+        low, high = np.minimum(low, corner[0]), np.maximum(high, corner[1])
     margin = 0.15 * max(sim.scene.cloth.size)
     low, high = low - margin, high + margin
     return (low[0], high[0], low[1], high[1], low[2], high[2])
@@ -113,6 +143,8 @@ class ClothView:
         self.pins = None
         if show_pins:
             self.pins = pv.PolyData(np.array(sim.positions[sim.pinned_indices]))
+            # A cloth with no pins yet may get some later (a mouse drag).
+            plotter.theme.allow_empty_mesh = True
             plotter.add_points(
                 self.pins,
                 color="#222222",
@@ -120,6 +152,19 @@ class ClothView:
                 render_points_as_spheres=True,
                 name="pins",
             )
+        self.obstacle_actors = []
+        extent = 3.0 * max(sim.scene.cloth.size)
+        for n, obstacle in enumerate(sim.model.obstacles):
+            ground = obstacle.name == "ground"
+            actor = plotter.add_mesh(
+                obstacle_mesh(obstacle, extent),
+                color=GROUND_COLOR if ground else OBSTACLE_COLOR,
+                smooth_shading=not ground,
+                specular=0.0 if ground else 0.3,
+                name=f"obstacle{n}",
+            )
+            actor.user_matrix = obstacle_matrix(obstacle, sim.time)
+            self.obstacle_actors.append(actor)
         self.reset_camera()
 
     def reset_camera(self) -> None:
@@ -131,6 +176,9 @@ class ClothView:
     def update(self) -> None:
         """Copy the simulation's current positions into the drawn meshes."""
         self.grid.points = self.sim.positions
+        for obstacle, actor in zip(self.sim.model.obstacles, self.obstacle_actors, strict=True):
+            if obstacle.path.size:
+                actor.user_matrix = obstacle_matrix(obstacle, self.sim.time)
         if self.pins is not None:
             pins = self.sim.positions[self.sim.pinned_indices]
             if len(pins) == self.pins.n_points:

@@ -111,3 +111,41 @@ def test_wind_of_100_m_per_s_ends_bounded_or_with_a_clear_error(integrator):
     force = 0.5 * 1.2 * 1.0 * 1.0 * (100.0**2 + 20.0**2)
     reach = np.linalg.norm(sim.positions - sim.model.rest_positions[pinned].mean(0), axis=1)
     assert reach.max() < 1.5 * (np.sqrt(2) + force / 2e4)
+
+
+def test_lift_is_across_the_wind_and_peaks_at_45_degrees():
+    """A flat plate at angle of attack a feels lift 1/2 rho C_l A w^2 sin a cos a,
+    perpendicular to the wind; face-on and edge-on it feels none."""
+    w, area = 6.0, 2.0
+    for degrees in (0.0, 20.0, 45.0, 90.0):
+        a = np.radians(degrees)
+        wind = np.array([w * np.cos(a), 0.0, -w * np.sin(a)])  # meets the x-y cloth at a
+        lifted = total_force(wind_only(WindSpec(velocity=tuple(wind), drag=0.0, lift=1.5)))
+        expected = 0.5 * 1.2 * 1.5 * area * w**2 * np.sin(a) * np.cos(a)
+        assert np.linalg.norm(lifted) == pytest.approx(expected, abs=1e-9)
+        assert abs(lifted @ wind) < 1e-9  # perpendicular to the relative wind
+
+
+def test_gusts_are_reproducible_bounded_and_change_with_the_seed():
+    def speeds(seed):
+        model = wind_only(WindSpec(velocity=(0, 0, -5.0), gust=0.4, gust_period=0.3, seed=seed))
+        wind = model.forces[0]
+        return np.array([wind.gust_factor(t) for t in np.linspace(0, 6, 601)])
+
+    first, again, other = speeds(7), speeds(7), speeds(8)
+    np.testing.assert_array_equal(first, again)
+    assert np.abs(first - other).max() > 0.05
+    assert first.min() >= 0.6 and first.max() <= 1.4
+    assert first.max() - first.min() > 0.3  # it does gust
+    # Smooth: the cosine ramp between values 2 * gust apart changes at most
+    # gust * 2 * (pi / 2) / period per second; samples are 0.01 s apart.
+    assert np.abs(np.diff(first)).max() <= 0.4 * 2 * (np.pi / 2) / 0.3 * 0.01
+
+
+def test_a_gusty_wind_force_follows_its_factor():
+    model = wind_only(WindSpec(velocity=(0, 0, -5.0), gust=0.5, seed=3))
+    wind = model.forces[0]
+    steady = total_force(model)[2]
+    for t in (0.0, 0.37, 1.9):
+        model.set_time(t)
+        assert total_force(model)[2] == pytest.approx(steady * wind.gust_factor(t) ** 2)

@@ -1,0 +1,322 @@
+"""Rigid obstacles and the collision response of cloth points against them.
+
+Collisions are resolved after every integrator step, on positions and
+velocities, so every integrator gets the same response (as pins do).
+
+How no point ends a step inside an obstacle (no tunnelling)
+-------------------------------------------------------------
+Each obstacle is convex and is grown by its ``thickness``. For every free
+point, the straight path it took during the step, expressed in the obstacle's
+own frame (so a moving obstacle is handled by relative motion), is tested
+against the grown shape. If the path enters it, the entry point and the outward
+normal there define a supporting plane of the grown shape, and the point is
+moved onto that plane if it lies behind it. A convex body lies entirely on one
+side of any of its supporting planes, so the corrected point is outside the
+grown shape: at least ``thickness`` from the real surface. Because the whole
+path is tested, not just its end, a fast point cannot skip over a thin box or
+through a sphere between two steps. A point that starts a step inside (an
+obstacle moved onto it, or the scene started that way) is pushed to the
+nearest surface point. The guarantee is per obstacle and for cloth points;
+with overlapping obstacles the last one wins, and a coarse cloth's triangles
+can still cut a thin box's edge between two points.
+
+Response (Bridson, Fedkiw and Anderson 2002, "Robust treatment of collisions,
+contact and friction for cloth animation", section 7.2): the part of the
+velocity relative to the obstacle that goes into the surface is removed; that
+change ``dv_n`` is the normal impulse per unit mass. Coulomb friction then
+stops the tangential relative velocity if it is at most
+``static_friction * dv_n`` and otherwise reduces it by ``friction * dv_n``.
+On a slope of angle ``theta`` under gravity this sticks exactly when
+``tan(theta) <= static_friction`` and slides with acceleration
+``g (sin(theta) - friction cos(theta))``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+#: Paths shorter than this (m) cannot cross a surface by themselves.
+TINY = 1e-15
+
+
+@dataclass
+class Contacts:
+    """Points that touched an obstacle in one step (indices into the free points)."""
+
+    index: np.ndarray  # (k,) point indices
+    normal: np.ndarray  # (k, 3) outward unit normals, world frame
+
+
+class Obstacle:
+    """A rigid convex obstacle, possibly moving along key frames.
+
+    Subclasses describe the shape in the obstacle's own frame, grown by the
+    thickness: :meth:`entry` (where a path enters) and :meth:`distance`
+    (signed distance to the real surface).
+    """
+
+    name = "obstacle"
+
+    def __init__(self, center, rotation, thickness, friction, static_friction, path=()):
+        self.center = np.asarray(center, dtype=float)
+        #: Columns are the obstacle's axes in world coordinates.
+        self.axes = np.asarray(rotation, dtype=float)
+        self.thickness = float(thickness)
+        self.friction = float(friction)
+        self.static_friction = float(static_friction)
+        self.path = np.asarray(path, dtype=float).reshape(-1, 4)
+
+    # -- motion ---------------------------------------------------------------
+
+    def center_at(self, t: float) -> np.ndarray:
+        """Centre at time ``t`` (linear between key frames, held outside)."""
+        if self.path.shape[0] == 0:
+            return self.center
+        times = self.path[:, 0]
+        return np.array([np.interp(t, times, self.path[:, 1 + k]) for k in range(3)])
+
+    def to_local(self, points: np.ndarray, t: float) -> np.ndarray:
+        return (points - self.center_at(t)) @ self.axes
+
+    def to_world(self, local: np.ndarray, t: float) -> np.ndarray:
+        return local @ self.axes.T + self.center_at(t)
+
+    # -- geometry (own frame) -------------------------------------------------
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper corners of a box in the own frame that holds the
+        grown shape."""
+        raise NotImplementedError
+
+    def entry(self, q0: np.ndarray, q1: np.ndarray):
+        """Where the paths ``q0 -> q1`` (own frame, ``(k, 3)``) first enter
+        the grown shape.
+
+        Returns
+        -------
+        hit : ndarray of bool, shape (k,)
+        point : ndarray, shape (k, 3)
+            Entry point (nearest surface point for paths starting inside).
+        normal : ndarray, shape (k, 3)
+            Outward unit normal at the entry point.
+        """
+        raise NotImplementedError
+
+    def distance(self, points: np.ndarray, t: float = 0.0) -> np.ndarray:
+        """Signed distance of world points to the real surface (negative inside)."""
+        raise NotImplementedError
+
+    # -- response -------------------------------------------------------------
+
+    def collide(self, x0, x1, v1, free, t0: float, t1: float) -> Contacts:
+        """Move points of ``x1`` out of the obstacle and apply the velocity
+        response and friction to ``v1``, both in place.
+
+        Parameters
+        ----------
+        x0, x1 : ndarray, shape (N, 3)
+            Positions at the start and end of the step.
+        v1 : ndarray, shape (N, 3)
+            Velocities at the end of the step.
+        free : ndarray of int
+            Indices of the points that may be moved (not pinned).
+        t0, t1 : float
+            Start and end time of the step.
+        """
+        q0 = self.to_local(x0[free], t0)
+        q1 = self.to_local(x1[free], t1)
+        low, high = self.bounds()
+        # Broad phase: a path whose bounding box misses the shape's cannot hit.
+        near = np.all((np.minimum(q0, q1) <= high) & (np.maximum(q0, q1) >= low), axis=1)
+        candidates = np.flatnonzero(near)
+        if candidates.size == 0:
+            return Contacts(np.empty(0, int), np.empty((0, 3)))
+        hit, point, normal = self.entry(q0[candidates], q1[candidates])
+        rows = candidates[hit]
+        point, normal = point[hit], normal[hit]
+        q = q1[rows]
+        behind = np.einsum("ij,ij->i", q - point, normal)
+        q -= np.minimum(behind, 0.0)[:, None] * normal
+        index = free[rows]
+        normal_world = normal @ self.axes.T
+        dt = max(t1 - t0, TINY)
+        obstacle_velocity = (self.center_at(t1) - self.center_at(t0)) / dt
+        slowed = self._respond(v1, index, normal_world, obstacle_velocity)
+        # Friction acted over the whole step: take the tangential distance it
+        # took away off the position too (else a stuck point would creep by
+        # dt^2 * a per step), staying on the supporting plane.
+        x1[index] = self.to_world(q, t1) - dt * slowed
+        return Contacts(index, normal_world)
+
+    def _respond(self, v, index, normal, obstacle_velocity) -> np.ndarray:
+        """Remove the approach velocity, apply friction; return the tangential
+        velocity that friction removed."""
+        relative = v[index] - obstacle_velocity
+        approach = np.einsum("ij,ij->i", relative, normal)
+        into = approach < 0.0
+        dv_n = np.where(into, -approach, 0.0)  # normal impulse per unit mass
+        relative += dv_n[:, None] * normal
+        tangential = relative - np.einsum("ij,ij->i", relative, normal)[:, None] * normal
+        speed = np.linalg.norm(tangential, axis=1)
+        sticks = into & (speed <= self.static_friction * dv_n)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            keep = np.where(sticks, 0.0, np.clip(1.0 - self.friction * dv_n / speed, 0.0, 1.0))
+        keep = np.where(into, keep, 1.0)
+        slowed = (1.0 - keep)[:, None] * tangential
+        v[index] = relative - slowed + obstacle_velocity
+        return slowed
+
+    def describe(self) -> str:
+        moving = f", moving through {self.path.shape[0]} key frames" if self.path.size else ""
+        return (
+            f"{self._shape_text()}, thickness {self.thickness:g} m, friction "
+            f"{self.friction:g} (static {self.static_friction:g}){moving}"
+        )
+
+    def _shape_text(self) -> str:
+        raise NotImplementedError
+
+
+class Sphere(Obstacle):
+    """A sphere of ``radius`` about its centre."""
+
+    name = "sphere"
+
+    def __init__(self, radius, **common):
+        super().__init__(rotation=np.eye(3), **common)
+        self.radius = float(radius)
+        self.grown = self.radius + self.thickness
+
+    def bounds(self):
+        return np.full(3, -self.grown), np.full(3, self.grown)
+
+    def entry(self, q0, q1):
+        d = q1 - q0
+        a = np.einsum("ij,ij->i", d, d)
+        b = np.einsum("ij,ij->i", q0, d)
+        c = np.einsum("ij,ij->i", q0, q0) - self.grown**2
+        inside = c <= 0.0
+        # |q0 + s d|^2 = R^2 -> a s^2 + 2 b s + c = 0; the smaller root enters.
+        disc = b * b - a * c
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = (-b - np.sqrt(np.maximum(disc, 0.0))) / a
+        crosses = ~inside & (a > TINY) & (disc >= 0.0) & (s >= 0.0) & (s <= 1.0)
+        s = np.where(crosses, s, 0.0)
+        point = q0 + s[:, None] * d
+        length = np.linalg.norm(point, axis=1)
+        normal = np.where(
+            length[:, None] > TINY, point / np.maximum(length, TINY)[:, None], [0.0, 0.0, 1.0]
+        )
+        point = self.grown * normal  # on the surface exactly (also for inside starts)
+        return inside | crosses, point, normal
+
+    def distance(self, points, t=0.0):
+        return np.linalg.norm(points - self.center_at(t), axis=1) - self.radius
+
+    def _shape_text(self):
+        return "sphere r = {:g} m at ({:g}, {:g}, {:g})".format(self.radius, *self.center)
+
+
+class Box(Obstacle):
+    """A box of edge lengths ``size`` along its own axes."""
+
+    name = "box"
+
+    def __init__(self, size, **common):
+        super().__init__(**common)
+        self.size = np.asarray(size, dtype=float)
+        self.half = 0.5 * self.size + self.thickness
+
+    def bounds(self):
+        return -self.half, self.half
+
+    def entry(self, q0, q1):
+        h = self.half
+        d = q1 - q0
+        inside = np.all(np.abs(q0) <= h, axis=1)
+        # Slab test: the path is inside the box for s in [enter, leave].
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s_a = (-h - q0) / d
+            s_b = (h - q0) / d
+        parallel = np.abs(d) <= TINY
+        low = np.where(parallel, np.where(np.abs(q0) <= h, -np.inf, np.inf), np.minimum(s_a, s_b))
+        high = np.where(parallel, np.where(np.abs(q0) <= h, np.inf, -np.inf), np.maximum(s_a, s_b))
+        enter, leave = low.max(axis=1), high.min(axis=1)
+        crosses = ~inside & (enter <= leave) & (enter >= 0.0) & (enter <= 1.0)
+        rows = np.arange(q0.shape[0])
+        axis = np.where(inside, np.argmin(h - np.abs(q0), axis=1), np.argmax(low, axis=1))
+        sign = np.where(inside, np.sign(q0[rows, axis]), -np.sign(d[rows, axis]))
+        sign = np.where(sign == 0.0, 1.0, sign)
+        point = np.where(inside[:, None], q0, q0 + np.where(crosses, enter, 0.0)[:, None] * d)
+        point[rows, axis] = sign * h[axis]
+        normal = np.zeros_like(q0)
+        normal[rows, axis] = sign
+        return inside | crosses, point, normal
+
+    def distance(self, points, t=0.0):
+        q = np.abs(self.to_local(points, t)) - 0.5 * self.size
+        outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
+        return outside + np.minimum(q.max(axis=1), 0.0)
+
+    def _shape_text(self):
+        return "box {:g} x {:g} x {:g} m at ({:g}, {:g}, {:g})".format(*self.size, *self.center)
+
+
+class Ground(Obstacle):
+    """The half-space behind a plane; its own z axis is the plane's normal."""
+
+    name = "ground"
+
+    def __init__(self, normal, **common):
+        n = np.asarray(normal, dtype=float)
+        n = n / np.linalg.norm(n)
+        # Any right-handed frame whose third axis is n will do.
+        helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        u = np.cross(helper, n)
+        u /= np.linalg.norm(u)
+        super().__init__(rotation=np.column_stack([u, np.cross(n, u), n]), **common)
+        self.normal = n
+
+    def bounds(self):
+        # Unbounded along the plane and below it; bounded above by the thickness.
+        return np.full(3, -np.inf), np.array([np.inf, np.inf, self.thickness])
+
+    def entry(self, q0, q1):
+        z0, z1 = q0[:, 2], q1[:, 2]
+        inside = z0 <= self.thickness
+        crosses = ~inside & (z1 < self.thickness)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = np.where(crosses, (z0 - self.thickness) / (z0 - z1), 0.0)
+        point = q0 + s[:, None] * (q1 - q0)
+        point[:, 2] = self.thickness
+        normal = np.zeros_like(q0)
+        normal[:, 2] = 1.0
+        return inside | crosses, point, normal
+
+    def distance(self, points, t=0.0):
+        return (points - self.center_at(t)) @ self.normal
+
+    def _shape_text(self):
+        return "ground through ({:g}, {:g}, {:g}), normal ({:.3g}, {:.3g}, {:.3g})".format(
+            *self.center, *self.normal
+        )
+
+
+def build_obstacle(spec) -> Obstacle:
+    """The obstacle an :class:`~pvcloth.scene.ObstacleSpec` describes."""
+    common = dict(
+        center=spec.center,
+        thickness=spec.thickness,
+        friction=spec.friction,
+        static_friction=spec.static_friction,
+        path=spec.path,
+    )
+    if spec.type == "sphere":
+        return Sphere(spec.radius, **common)
+    if spec.type == "box":
+        rotation = Rotation.from_euler("xyz", spec.rotation, degrees=True).as_matrix()
+        return Box(spec.size, rotation=rotation, **common)
+    return Ground(spec.normal, **common)
