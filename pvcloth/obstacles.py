@@ -68,6 +68,7 @@ class Obstacle:
         self.friction = float(friction)
         self.static_friction = float(static_friction)
         self.path = np.asarray(path, dtype=float).reshape(-1, 4)
+        self._world_half = None
 
     # -- motion ---------------------------------------------------------------
 
@@ -90,6 +91,20 @@ class Obstacle:
         """Lower and upper corners of a box in the own frame that holds the
         grown shape."""
         raise NotImplementedError
+
+    def may_touch(self, low: np.ndarray, high: np.ndarray, t0: float, t1: float) -> bool:
+        """Whether anything in the world box ``[low, high]`` can touch the
+        grown shape during ``t0 -> t1``: a test of two corners that lets a
+        cloth far from the obstacle skip the per-point work."""
+        if self._world_half is None:  # world half-extent of the grown shape
+            self._world_half = np.abs(self.axes) @ self.bounds()[1]
+        half = self._world_half
+        if self.path.size:
+            c0, c1 = self.center_at(t0), self.center_at(t1)
+            top, bottom = np.maximum(c0, c1) + half, np.minimum(c0, c1) - half
+        else:
+            top, bottom = self.center + half, self.center - half
+        return bool((low <= top).all() and (high >= bottom).all())
 
     def entry(self, q0: np.ndarray, q1: np.ndarray):
         """Where the paths ``q0 -> q1`` (own frame, ``(k, 3)``) first enter
@@ -283,6 +298,11 @@ class Ground(Obstacle):
     def bounds(self):
         # Unbounded along the plane and below it; bounded above by the thickness.
         return np.full(3, -np.inf), np.array([np.inf, np.inf, self.thickness])
+
+    def may_touch(self, low, high, t0, t1):
+        lowest = np.where(self.normal > 0, low, high)  # the box corner deepest below
+        height = min(float((lowest - self.center_at(t)) @ self.normal) for t in (t0, t1))
+        return height <= self.thickness
 
     def entry(self, q0, q1):
         z0, z1 = q0[:, 2], q1[:, 2]

@@ -146,3 +146,24 @@ def test_image_matches_stored_reference(tmp_path):
     # software GL differs by a few levels between builds; shape changes by many
     assert difference.mean() < 1.0
     assert (difference > 40).mean() < 0.005
+
+
+@pytest.mark.parametrize("name", ["drape_sphere", "drape_cube", "ground", "flag"])
+def test_environment_scenes_render_with_their_obstacles(name, tmp_path):
+    """Each wind or obstacle scene renders a GIF in which the obstacles show:
+    blue-grey solid pixels for a sphere or box, beige pixels for the ground."""
+    from pvcloth.movie import render
+
+    sim = Simulation.from_file(SCENES / f"{name}.toml")
+    out = tmp_path / f"{name}.gif"
+    render(sim, out, frames=3, fps=30, size=(200, 150), progress=False)
+    frames = iio.imread(out)
+    assert frames.shape[:3] == (3, 150, 200)
+    r, g, b = (frames[0][..., c].astype(int) for c in range(3))
+    # Blue-grey and darker than the sky gradient (whose blue is above 200).
+    solid = ((b - r > 15) & (b < 170)).mean()
+    floor = ((r - b > 10) & (np.abs(r - g) < 12)).mean()
+    kinds = {o.name for o in sim.model.obstacles}
+    assert (solid > 0.01) == bool(kinds & {"sphere", "box"})
+    assert (floor > 0.05) == ("ground" in kinds)
+    assert cloth_pixels(frames[-1]).mean() > 0.005
