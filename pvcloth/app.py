@@ -8,16 +8,25 @@ queueing ever more substeps.
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import time
 
+from .errors import DivergenceError
 from .integrators import INTEGRATORS
 from .interaction import ClothDragStyle
+from .scene import WindSpec
+
+#: Wind the ``w`` key turns on in a scene that has none: across a cloth that
+#: hangs in the x-z plane, away from the default camera.
+DEFAULT_WIND = WindSpec(velocity=(0.0, 6.0, 0.0))
 
 KEYS = {
     "space": "pause / resume",
     "n": "single step (one frame)",
     "b": "back to the start",
     "i": "cycle integrator",
+    "w": "wind on / off",
     "k": "screenshot (pvcloth_NNN.png)",
     "u": "unpin points pinned by dragging",
     "q": "quit",
@@ -36,8 +45,8 @@ class ClothApp:
     fps : float
         Target frames per second.
     physics_share : float
-        Share of a frame's wall time that physics may use before the
-        animation slows down.
+        Largest share of a frame's wall time that physics may use before the
+        animation slows down; less when drawing needs more of the frame.
     off_screen : bool
         Build the window off-screen (for tests and benchmarks).
     window_size : (int, int)
@@ -65,18 +74,24 @@ class ClothApp:
 
         self.sim = sim
         self.fps = fps
+        self.physics_share = physics_share
         self.budget = physics_share / fps
+        self.render_ms = 0.0
+        self.message = ""
         self.paused = False
         self.speed = 1.0  # simulated seconds per wall second (1 = real time)
         self.physics_ms = 0.0
         self.frame_ms = 0.0
         self._last_frame = None
         self._shots = 0
+        # No multisampling: under software GL (llvmpipe) 4x MSAA triples the
+        # cost of a frame (benchmarks/results/interactive_fps.md).
         self.plotter = pv.Plotter(
             off_screen=off_screen,
             window_size=list(window_size),
             title=f"pvcloth - {sim.scene.name}",
         )
+        self.plotter.render_window.SetMultiSamples(0)  # before the window first draws
         self.view = ClothView(sim, self.plotter)
         self.style = ClothDragStyle(sim, on_change=self.view.update)
         self.plotter.iren.style = self.style  # PyVista keeps it through show()
@@ -87,6 +102,7 @@ class ClothApp:
             ("n", self.single_step),
             ("b", self.restart),
             ("i", self.cycle_integrator),
+            ("w", self.toggle_wind),
             ("k", self.screenshot),
             ("u", self.unpin_extras),
         ):
@@ -102,6 +118,21 @@ class ClothApp:
             style="modern",
             fmt="%.2f",
         )
+        self._wind = sim.scene.wind or DEFAULT_WIND  # what "w" turns on
+        speed = math.hypot(*self._wind.velocity)
+        self._wind_direction = (
+            tuple(c / speed for c in self._wind.velocity) if speed else (0.0, 1.0, 0.0)
+        )
+        self.plotter.add_slider_widget(
+            self._set_wind_speed,
+            rng=[0.0, 20.0],
+            value=speed,
+            title="wind m/s",
+            pointa=(0.7, 0.8),
+            pointb=(0.97, 0.8),
+            style="modern",
+            fmt="%.1f",
+        )
         self._update_status()
 
     # -- the frame loop --------------------------------------------------------
@@ -113,10 +144,22 @@ class ClothApp:
             self.frame_ms = 0.8 * self.frame_ms + 0.2 * 1e3 * (now - self._last_frame)
         self._last_frame = now
         if not self.paused:
-            self._advance(self.speed / self.fps)
+            try:
+                self._advance(self.speed / self.fps)
+            except DivergenceError as error:
+                self.paused = True  # the state is the last good step; b restarts
+                self.message = f"DIVERGED - press b to restart. {error}"
         self.view.update()
         self._update_status()
+        start = time.perf_counter()
         self.plotter.render()
+        drawn = 1e3 * (time.perf_counter() - start)
+        self.render_ms = drawn if not self.render_ms else 0.8 * self.render_ms + 0.2 * drawn
+        # Physics gets what drawing leaves of the frame (at least a fifth).
+        period = 1.0 / self.fps
+        self.budget = min(
+            self.physics_share * period, max(0.2 * period, period - 1.1e-3 * self.render_ms)
+        )
 
     def _advance(self, seconds: float):
         start = time.perf_counter()
@@ -135,14 +178,16 @@ class ClothApp:
             "" if self.speed > 0.99 else f"  SLOW MOTION x{self.speed:.2f} (physics cannot keep up)"
         )
         state = "PAUSED  " if self.paused else ""
-        self.status.SetText(
-            2,
-            (
-                f"{state}t = {self.sim.time:6.2f} s   {fps:4.1f} fps   "
-                f"physics {self.physics_ms:5.1f} ms"
-                f"   {self.sim.integrator.name}, dt {self.sim.dt:.2g} s{slow}"
-            ),
+        wind = self.sim.scene.wind
+        blowing = "" if wind is None else f"   wind {math.hypot(*wind.velocity):.1f} m/s"
+        text = (
+            f"{state}t = {self.sim.time:6.2f} s   {fps:4.1f} fps   "
+            f"physics {self.physics_ms:5.1f} ms   draw {self.render_ms:5.1f} ms"
+            f"   {self.sim.integrator.name}, dt {self.sim.dt:.2g} s{blowing}{slow}"
         )
+        if self.message:
+            text += "\n" + self.message
+        self.status.SetText(2, text)
 
     # -- keys and widgets ----------------------------------------------------
 
@@ -159,7 +204,14 @@ class ClothApp:
     def restart(self):
         self.style.grabbed = None  # a point held by the mouse is released too
         self.sim.reset()
+        self.message = ""
         self.view.update()
+        self._update_status()
+
+    def toggle_wind(self):
+        """Turn the wind off, or back on at the slider's speed."""
+        self.sim.set_wind(None if self.sim.scene.wind is not None else self._wind)
+        self._update_status()
 
     def cycle_integrator(self):
         names = sorted(INTEGRATORS)
@@ -178,6 +230,13 @@ class ClothApp:
     def _set_stiffness(self, value):
         self.sim.scale_stiffness(value / self._stiffness)
         self._stiffness = value
+
+    def _set_wind_speed(self, value):
+        """Keep the wind's direction, change its speed (applied now if it blows)."""
+        velocity = tuple(value * c for c in self._wind_direction)
+        self._wind = dataclasses.replace(self._wind, velocity=velocity)
+        if self.sim.scene.wind is not None:
+            self.sim.set_wind(self._wind)
 
     def run(self, max_frames: int = 10**9):
         """Open the window and animate until it is closed (or ``q``)."""

@@ -193,6 +193,24 @@ class Simulation:
         if self.dt > self.stable_dt():
             self.dt = self._checked_step(self.dt, "substep")
 
+    def set_wind(self, wind) -> None:
+        """Replace the scene's wind mid-run (``None`` removes the term).
+
+        Parameters
+        ----------
+        wind : WindSpec or None
+        """
+        from .forces import Wind
+        from .scene import WindSpec
+
+        if wind is not None and not isinstance(wind, WindSpec):
+            raise SceneError("wind", f"expected a WindSpec or None, got {type(wind).__name__}")
+        forces = [term for term in self.model.forces if not isinstance(term, Wind)]
+        if wind is not None and (wind.drag > 0 or wind.lift > 0):
+            forces.append(Wind.from_spec(wind, self.model.shape))
+        self.model.forces = forces
+        self.scene = self.scene.replace(wind=wind)
+
     def set_integrator(self, name: str) -> None:
         """Switch integrator mid-run; the step asked for is kept if stable,
         else split into substeps."""

@@ -129,7 +129,7 @@ def test_keys_pause_step_reset_and_cycle(app):
 
 
 def test_slow_physics_slows_the_animation_instead_of_spiralling(app):
-    app.budget = 1e-6  # physics can never keep up
+    app.physics_share = app.budget = 1e-6  # physics can never keep up
     for _ in range(6):
         app.frame()
     assert app.speed < 0.1
@@ -172,4 +172,34 @@ def test_the_same_checks_in_a_real_window_under_xvfb():
         timeout=600,
     )
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-2000:]
-    assert "7 passed" in result.stdout
+    assert "9 passed" in result.stdout
+
+
+def test_w_toggles_wind_and_the_slider_sets_its_speed(app):
+    def wind_terms():
+        return [t for t in app.sim.model.forces if t.name == "wind"]
+
+    assert not wind_terms()  # the hanging scene has no wind
+    press_key(app, "w")
+    (wind,) = wind_terms()
+    assert np.linalg.norm(wind.velocity) == pytest.approx(6.0)
+    app._set_wind_speed(12.5)
+    (wind,) = wind_terms()
+    assert np.linalg.norm(wind.velocity) == pytest.approx(12.5)
+    t = app.sim.time
+    app.frame()
+    assert app.sim.time > t and "wind 12.5 m/s" in app.status.GetText(2)
+    press_key(app, "w")
+    assert not wind_terms() and app.sim.scene.wind is None
+
+
+def test_a_diverging_run_pauses_with_a_message_instead_of_crashing(app):
+    app.sim.dt = 0.05  # far above the stable step
+    for _ in range(40):
+        app.frame()
+        if app.paused:
+            break
+    assert app.paused and "DIVERGED" in app.status.GetText(2)
+    assert np.isfinite(app.sim.positions).all()
+    press_key(app, "b")
+    assert app.sim.time == 0.0 and "DIVERGED" not in app.status.GetText(2)
