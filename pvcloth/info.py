@@ -43,6 +43,14 @@ def describe(sim) -> str:
     more = f" and {pinned.size - 6} more" if pinned.size > 6 else ""
     lines.append(f"pins        {pinned.size} point(s): {shown or 'none'}{more}")
     lines.append(
+        "backend     "
+        + (
+            "numba (compiled spring kernels)"
+            if model.compiled
+            else "numpy (set PVCLOTH_BACKEND=numba or install numba for compiled kernels)"
+        )
+    )
+    lines.append(
         f"integrator  {sim.integrator.name} (order {sim.integrator.order}: "
         f"{sim.integrator.description}), dt = {sim.dt:.4g} s"
     )

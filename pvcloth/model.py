@@ -13,6 +13,7 @@ import numpy as np
 
 from .forces import AirDamping, Gravity, Springs, Wind
 from .grid import initial_positions, lumped_masses
+from .kernels import resolve_backend
 from .obstacles import build_obstacle
 
 
@@ -43,6 +44,14 @@ class Model:
     pinned: np.ndarray
     forces: list = field(default_factory=list)
     obstacles: list = field(default_factory=list)
+    backend: str = "numpy"
+
+    def __post_init__(self):
+        self._plan = None
+        if self.backend == "numba":
+            from .kernels import SpringPlan
+
+            self._plan = SpringPlan(self.springs, self.shape)
 
     @property
     def n_points(self) -> int:
@@ -53,14 +62,45 @@ class Model:
         """The spring families that were built."""
         return [term for term in self.forces if isinstance(term, Springs)]
 
+    @property
+    def compiled(self) -> bool:
+        """Whether springs run in the compiled kernels (:mod:`pvcloth.kernels`)."""
+        return self._plan is not None
+
     def compute_forces(self, x: np.ndarray, v: np.ndarray, out: np.ndarray | None = None):
         """Total force ``(N, 3)`` on every point (pins included)."""
         f = np.zeros_like(x) if out is None else out
         if out is not None:
             f.fill(0.0)
+        if self._plan is not None:
+            self._compiled_forces(x, v, f)
+            return f
         for term in self.forces:
             term.accumulate(x, v, f)
         return f
+
+    def _compiled_forces(self, x, v, f) -> None:
+        """Springs, gravity and air damping in compiled kernels; any other
+        term (wind) in NumPy."""
+        from .kernels import add_body_forces, spring_forces
+
+        spring_forces(self._plan, x, v, f)
+        gravity, air = np.zeros(3), 0.0
+        for term in self.forces:
+            if isinstance(term, Gravity):
+                gravity = gravity + term.acceleration
+            elif isinstance(term, AirDamping):
+                air += term.rate
+            elif not isinstance(term, Springs):
+                term.accumulate(x, v, f)
+        if air or gravity.any():
+            add_body_forces(v, f, self.mass, gravity, air, self.shape)
+
+    def refresh(self) -> None:
+        """Call after changing spring constants in place (the compiled
+        kernels hold copies)."""
+        if self._plan is not None:
+            self._plan.refresh()
 
     def set_time(self, t: float) -> None:
         """Tell time-dependent terms (gusty wind) the time of the coming step."""
@@ -132,12 +172,15 @@ def pinned_mask(scene) -> np.ndarray:
     return flat
 
 
-def build_model(scene) -> Model:
+def build_model(scene, backend: str | None = None) -> Model:
     """Build the model a scene describes, with only the terms it needs.
 
     Parameters
     ----------
     scene : Scene
+    backend : {"auto", "numba", "numpy"}, optional
+        Where spring forces are computed: compiled kernels or pure NumPy
+        (default: ``PVCLOTH_BACKEND`` or ``"auto"``, numba when installed).
 
     Returns
     -------
@@ -171,4 +214,12 @@ def build_model(scene) -> Model:
         w = scene.wind
         forces.append(Wind.from_spec(w, (ny, nx)))
     obstacles = [build_obstacle(spec) for spec in scene.obstacles]
-    return Model((ny, nx), x.reshape(-1, 3).copy(), mass, pinned_mask(scene), forces, obstacles)
+    return Model(
+        (ny, nx),
+        x.reshape(-1, 3).copy(),
+        mass,
+        pinned_mask(scene),
+        forces,
+        obstacles,
+        resolve_backend(backend),
+    )

@@ -32,6 +32,10 @@ class Simulation:
     stability : {"refuse", "substep", "ignore"}, optional
         Overrides ``scene.solver.stability``: what to do with a step above
         the integrator's stable step.
+    backend : {"auto", "numba", "numpy"}, optional
+        Compiled kernels or pure NumPy for the spring forces (default:
+        ``PVCLOTH_BACKEND`` or ``"auto"``: numba when installed). Both give
+        the same results to round-off.
 
     Raises
     ------
@@ -54,11 +58,12 @@ class Simulation:
         integrator: str | None = None,
         dt: float | None = None,
         stability: str | None = None,
+        backend: str | None = None,
     ):
         if not isinstance(scene, Scene):
             raise SceneError("scene", f"expected a pvcloth.Scene, got {type(scene).__name__}")
         self.scene = scene
-        self.model = build_model(scene)
+        self.model = build_model(scene, backend)
         self.integrator = get_integrator(integrator or scene.solver.integrator)
         #: The step asked for (scene or override); ``dt`` may be a substep of it.
         self.requested_dt = (
@@ -190,6 +195,7 @@ class Simulation:
             for group in springs.groups:
                 group.stiffness *= factor
                 group.damping *= factor
+        self.model.refresh()
         if self.dt > self.stable_dt():
             self.dt = self._checked_step(self.dt, "substep")
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..state import State
 from .base import Integrator, register
 
@@ -22,6 +24,13 @@ class SymplecticEuler(Integrator):
     description = "semi-implicit Euler; 1st order, bounded energy error"
 
     def step(self, model, state, control, dt):
+        if getattr(model, "compiled", False):
+            from ..kernels import kick_drift
+
+            f = model.compute_forces(state.x, state.v)
+            x, v = np.empty_like(state.x), np.empty_like(state.v)
+            kick_drift(state.x, state.v, f, control.inv_mass, dt, x, v, model.shape)
+            return State(x, v, state.t + dt)
         a = model.compute_forces(state.x, state.v)
         a *= control.inv_mass[:, None]
         v = state.v + dt * a

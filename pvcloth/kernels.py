@@ -1,0 +1,251 @@
+"""Compiled kernels (numba) for the hot loop: spring forces and the
+semi-implicit Euler step.
+
+The NumPy code in :mod:`pvcloth.forces` stays the reference; these kernels
+compute the same sums in a different order (equal to round-off, tested) and
+are used when numba is installed, unless ``PVCLOTH_BACKEND=numpy`` or
+``backend="numpy"`` asks for the pure NumPy path.
+
+Why they are fast (``benchmarks/results/cpu_speed.md``):
+
+- Each spring is evaluated once and added to both ends, row by row: the
+  inner loop over a row is contiguous, so LLVM vectorises it (AVX2).
+- Rows are split into blocks handled by threads in two phases (even blocks,
+  then odd blocks); a block writes only its own rows and the two rows after
+  it, so blocks of one phase never write the same point and no atomics or
+  private copies are needed.
+- Forces, gravity, air damping and the velocity and position update are one
+  pass; nothing is allocated per step.
+- Kernels are compiled on first use and cached on disk (``cache=True``), so
+  a second run starts without compiling.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+try:  # numba is a dependency, but the NumPy path must work without it
+    import numba
+    from numba import njit, prange
+except ImportError:  # pragma: no cover - exercised only where numba is missing
+    numba = None
+
+BACKENDS = ("auto", "numba", "numpy")
+
+#: LLVM fast-math flags: reassociation and contraction for vectorising, but no
+#: "no NaN / no inf" assumptions (the divergence guard looks for them).
+FASTMATH = {"reassoc", "contract", "arcp", "nsz", "afn"}
+
+
+def available() -> bool:
+    """Whether the compiled kernels can be used (numba imports)."""
+    return numba is not None
+
+
+def resolve_backend(backend: str | None) -> str:
+    """``"numba"`` or ``"numpy"``: what ``backend`` (or ``PVCLOTH_BACKEND``) asks
+    for, with ``"auto"`` choosing numba when it is installed."""
+    from .validation import choice
+
+    if backend is None:
+        backend = os.environ.get("PVCLOTH_BACKEND", "auto")
+    backend = choice("backend", backend, BACKENDS)
+    if backend == "auto":
+        return "numba" if available() else "numpy"
+    if backend == "numba" and not available():
+        from .errors import SceneError
+
+        raise SceneError("backend", "'numba' was asked for but numba is not installed")
+    return backend
+
+
+class SpringPlan:
+    """The model's spring groups as the kernels read them: stiffness, damping
+    and rest length of group ``g`` in row ``g`` of ``(G, ny, nx)`` arrays
+    (the group's own array in the top-left corner), and where each group's
+    end a starts and how far end b is from it.
+
+    These are copies: after changing a group's arrays (as
+    :meth:`pvcloth.Simulation.scale_stiffness` does), call :meth:`refresh`.
+    """
+
+    def __init__(self, springs, shape):
+        self.springs = springs
+        self.shape = shape
+        groups = self._groups()
+        ny, nx = shape
+        self.stiffness = np.zeros((len(groups), ny, nx))
+        self.damping = np.zeros_like(self.stiffness)
+        self.rest = np.ones_like(self.stiffness)
+        starts = [(g.a[0].start, g.a[1].start, g.b[0].start, g.b[1].start) for g in groups]
+        self.geometry = np.array(
+            [(a0, a1, b0 - a0, b1 - a1) for a0, a1, b0, b1 in starts], dtype=np.int64
+        ).reshape(-1, 4)
+        self.extent = np.array([g.rest.shape for g in groups], dtype=np.int64).reshape(-1, 2)
+        self.refresh()
+        # Two phases of blocks, two blocks per thread and phase. A block
+        # writes from one row before it (offset dj = -1) to two rows after it
+        # (dj = 2), so blocks of one phase, separated by a block of at least
+        # four rows, never write the same row.
+        threads = numba.get_num_threads() if numba is not None else 1
+        count = max(1, min(2 * threads, ny // 8))
+        self.blocks = np.linspace(0, ny, 2 * count + 1).astype(np.int64)
+
+    def _groups(self):
+        return [g for family in self.springs for g in family.groups]
+
+    def refresh(self) -> None:
+        """Copy the groups' current constants in."""
+        for n, g in enumerate(self._groups()):
+            rows, cols = g.rest.shape
+            self.stiffness[n, :rows, :cols] = g.stiffness
+            self.damping[n, :rows, :cols] = g.damping
+            self.rest[n, :rows, :cols] = g.rest
+
+    @property
+    def empty(self) -> bool:
+        return self.stiffness.shape[0] == 0
+
+
+if numba is not None:
+
+    @njit(fastmath=FASTMATH, cache=True, inline="always")
+    def _spring_rows(x3, v3, f3, k, c, rest, a0, a1, dj, di, rows, cols, lo, hi, tmp):
+        """Springs of one group (``rows x cols`` of them) whose end a lies in
+        rows ``[lo, hi)``."""
+        b1 = a1 + di
+        first = max(lo - a0, 0)
+        last = min(hi - a0, rows)
+        for r in range(first, last):
+            ja = a0 + r
+            jb = ja + dj
+            xa, xb, va, vb = x3[ja], x3[jb], v3[ja], v3[jb]
+            kr, cr, lr = k[r], c[r], rest[r]
+            for q in range(cols):
+                p, s = a1 + q, b1 + q
+                dx = xb[s, 0] - xa[p, 0]
+                dy = xb[s, 1] - xa[p, 1]
+                dz = xb[s, 2] - xa[p, 2]
+                length = np.sqrt(dx * dx + dy * dy + dz * dz)
+                inv = 1.0 / max(length, 1e-12)
+                closing = (vb[s, 0] - va[p, 0]) * dx + (vb[s, 1] - va[p, 1]) * dy
+                closing += (vb[s, 2] - va[p, 2]) * dz
+                pull = (kr[q] * (length - lr[q]) + cr[q] * closing * inv) * inv
+                tmp[0, q] = pull * dx
+                tmp[1, q] = pull * dy
+                tmp[2, q] = pull * dz
+            fa, fb = f3[ja], f3[jb]
+            for q in range(cols):  # separate loops: end a and end b may be the same row
+                fa[a1 + q, 0] += tmp[0, q]
+                fa[a1 + q, 1] += tmp[1, q]
+                fa[a1 + q, 2] += tmp[2, q]
+            for q in range(cols):
+                fb[b1 + q, 0] -= tmp[0, q]
+                fb[b1 + q, 1] -= tmp[1, q]
+                fb[b1 + q, 2] -= tmp[2, q]
+
+    def _spring_forces(x3, v3, f3, stiffness, damping, rest, geometry, extent, blocks):
+        """Add every spring's force to ``f3``."""
+        count = (blocks.size - 1) // 2
+        for phase in range(2):
+            for n in prange(count):
+                b = 2 * n + phase
+                lo, hi = blocks[b], blocks[b + 1]
+                tmp = np.empty((3, x3.shape[1]))
+                for g in range(stiffness.shape[0]):
+                    _spring_rows(
+                        x3,
+                        v3,
+                        f3,
+                        stiffness[g],
+                        damping[g],
+                        rest[g],
+                        geometry[g, 0],
+                        geometry[g, 1],
+                        geometry[g, 2],
+                        geometry[g, 3],
+                        extent[g, 0],
+                        extent[g, 1],
+                        lo,
+                        hi,
+                        tmp,
+                    )
+
+    def _add_body_forces(v3, f3, mass, gravity, air):
+        """``f += m g - air m v`` (gravity and linear air damping)."""
+        ny, nx, _ = f3.shape
+        for j in prange(ny):
+            for i in range(nx):
+                m = mass[j, i]
+                for d in range(3):
+                    f3[j, i, d] += m * (gravity[d] - air * v3[j, i, d])
+
+    def _kick_drift(x3, v3, f3, inv_mass, dt, x_out, v_out):
+        """``v' = v + dt f / m``, ``x' = x + dt v'`` (pinned points: 1/m = 0)."""
+        ny, nx, _ = x3.shape
+        for j in prange(ny):
+            for i in range(nx):
+                w = dt * inv_mass[j, i]
+                for d in range(3):
+                    vn = v3[j, i, d] + w * f3[j, i, d]
+                    v_out[j, i, d] = vn
+                    x_out[j, i, d] = x3[j, i, d] + dt * vn
+
+    def _compile(function):
+        """A serial and a threaded build of one kernel. Threads pay only on
+        big grids: waking them costs microseconds, more when other thread
+        pools (BLAS) compete for the cores."""
+        serial = njit(fastmath=FASTMATH, cache=True)(function)
+        threaded = njit(fastmath=FASTMATH, cache=True, parallel=True)(function)
+        return serial, threaded
+
+    _SPRINGS = _compile(_spring_forces)
+    _BODY = _compile(_add_body_forces)
+    _KICK = _compile(_kick_drift)
+
+#: Grids with at least this many rows use the threaded kernels.
+THREADED_ROWS = 64
+
+
+def _pick(builds, rows: int):
+    return builds[rows >= THREADED_ROWS]
+
+
+def spring_forces(plan: SpringPlan, x, v, f) -> None:
+    """Add all springs' forces to ``f`` (``(N, 3)`` arrays, C-contiguous)."""
+    if plan.empty:
+        return
+    shape = plan.shape + (3,)
+    _pick(_SPRINGS, plan.shape[0])(
+        x.reshape(shape),
+        v.reshape(shape),
+        f.reshape(shape),
+        plan.stiffness,
+        plan.damping,
+        plan.rest,
+        plan.geometry,
+        plan.extent,
+        plan.blocks,
+    )
+
+
+def add_body_forces(v, f, mass, gravity, air: float, shape) -> None:
+    """Add gravity and linear air damping to ``f``."""
+    s3 = shape + (3,)
+    _pick(_BODY, shape[0])(v.reshape(s3), f.reshape(s3), mass.reshape(shape), gravity, air)
+
+
+def kick_drift(x, v, f, inv_mass, dt: float, x_out, v_out, shape) -> None:
+    """The semi-implicit Euler update from the total force ``f``, into ``x_out, v_out``."""
+    s3 = shape + (3,)
+    _pick(_KICK, shape[0])(
+        x.reshape(s3),
+        v.reshape(s3),
+        f.reshape(s3),
+        inv_mass.reshape(shape),
+        dt,
+        x_out.reshape(s3),
+        v_out.reshape(s3),
+    )
