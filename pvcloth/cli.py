@@ -115,6 +115,32 @@ def cmd_tradeoff(args) -> None:
     print(f"wrote {out / 'tradeoff.csv'} and {out / 'tradeoff.png'}")
 
 
+def cmd_sweep(args) -> None:
+    from pathlib import Path
+
+    from . import sweep
+    from .scene import load_scene
+
+    scene = load_scene(args.scene)
+    sets = sweep.parse_sets(args.set or [])
+    if not sets:
+        raise sweep.SweepError("give at least one --set KEY=VALUES")
+    out = Path(args.output)
+    rows = sweep.run_sweep(
+        scene,
+        sets,
+        out,
+        duration=args.duration,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        progress=not args.quiet,
+    )
+    axes = args.axes.split(",") if args.axes else None
+    sweep.plot(rows, sets, out / "sweep.png", axes)
+    print(sweep.summary(rows))
+    print(f"wrote {out / 'sweep.csv'} ({len(rows)} runs) and {out / 'sweep.png'}")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="pvcloth", description="Mass-spring cloth with PyVista.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -158,6 +184,28 @@ def build_parser() -> argparse.ArgumentParser:
     trade.add_argument("--resolution", type=int, help="points per side instead of the scene's")
     trade.add_argument("--quiet", action="store_true", help="no progress bar")
     trade.set_defaults(func=cmd_tradeoff)
+
+    sweep = sub.add_parser(
+        "sweep",
+        help="stability and accuracy over a product of settings, on Dask",
+        description="Each combination of --set values is a short simulation run on Dask; "
+        "rows go to OUT/sweep.csv as they finish (a rerun skips finished rows).",
+    )
+    sweep.add_argument("scene", help="scene file (TOML)")
+    sweep.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUES",
+        help="a scene key and its values: a,b,c or START:STOP:Nlin or START:STOP:Nlog "
+        "(repeat for more keys), e.g. --set solver.dt=1e-4:1e-2:8log",
+    )
+    sweep.add_argument("-o", "--output", required=True, help="folder for sweep.csv/.png")
+    sweep.add_argument("--duration", type=float, default=0.25, help="simulated s per run")
+    sweep.add_argument("--scheduler", help="address of a running Dask scheduler")
+    sweep.add_argument("--workers", type=int, help="local workers (default: one per core)")
+    sweep.add_argument("--axes", help="two swept keys for the stability map (KEY1,KEY2)")
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    sweep.set_defaults(func=cmd_sweep)
     return parser
 
 
