@@ -8,12 +8,14 @@ are used when numba is installed, unless ``PVCLOTH_BACKEND=numpy`` or
 
 Why they are fast (``benchmarks/results/cpu_speed.md``):
 
-- Each spring is evaluated once and added to both ends, row by row: the
-  inner loop over a row is contiguous, so LLVM vectorises it (AVX2).
-- Rows are split into blocks handled by threads in two phases (even blocks,
-  then odd blocks); a block writes only its own rows and the two rows after
-  it, so blocks of one phase never write the same point and no atomics or
-  private copies are needed.
+- Each spring is evaluated once and added to both ends, row by row. A block
+  of rows is first copied component by component (x, y, z, vx, vy, vz rows),
+  so every load in the inner loop is contiguous and LLVM vectorises it
+  (AVX2); this alone halved the time of the same loop on the ``(N, 3)``
+  layout. The block's forces are added back at the end.
+- Blocks are handled by threads in two phases (even blocks, then odd
+  blocks); a block writes from the row before it to two rows after it, so
+  blocks of one phase never write the same point and no atomics are needed.
 - Forces, gravity, air damping and the velocity and position update are one
   pass; nothing is allocated per step.
 - Kernels are compiled on first use and cached on disk (``cache=True``), so
@@ -111,67 +113,81 @@ class SpringPlan:
 
 if numba is not None:
 
-    @njit(fastmath=FASTMATH, cache=True, inline="always")
-    def _spring_rows(x3, v3, f3, k, c, rest, a0, a1, dj, di, rows, cols, lo, hi, tmp):
-        """Springs of one group (``rows x cols`` of them) whose end a lies in
-        rows ``[lo, hi)``."""
-        b1 = a1 + di
-        first = max(lo - a0, 0)
-        last = min(hi - a0, rows)
-        for r in range(first, last):
-            ja = a0 + r
-            jb = ja + dj
-            xa, xb, va, vb = x3[ja], x3[jb], v3[ja], v3[jb]
-            kr, cr, lr = k[r], c[r], rest[r]
-            for q in range(cols):
-                p, s = a1 + q, b1 + q
-                dx = xb[s, 0] - xa[p, 0]
-                dy = xb[s, 1] - xa[p, 1]
-                dz = xb[s, 2] - xa[p, 2]
-                length = np.sqrt(dx * dx + dy * dy + dz * dz)
-                inv = 1.0 / max(length, 1e-12)
-                closing = (vb[s, 0] - va[p, 0]) * dx + (vb[s, 1] - va[p, 1]) * dy
-                closing += (vb[s, 2] - va[p, 2]) * dz
-                pull = (kr[q] * (length - lr[q]) + cr[q] * closing * inv) * inv
-                tmp[0, q] = pull * dx
-                tmp[1, q] = pull * dy
-                tmp[2, q] = pull * dz
-            fa, fb = f3[ja], f3[jb]
-            for q in range(cols):  # separate loops: end a and end b may be the same row
-                fa[a1 + q, 0] += tmp[0, q]
-                fa[a1 + q, 1] += tmp[1, q]
-                fa[a1 + q, 2] += tmp[2, q]
-            for q in range(cols):
-                fb[b1 + q, 0] -= tmp[0, q]
-                fb[b1 + q, 1] -= tmp[1, q]
-                fb[b1 + q, 2] -= tmp[2, q]
+    @njit(fastmath=FASTMATH, cache=True)
+    def _spring_block(x3, v3, f3, stiffness, damping, rest, geometry, extent, lo, hi):
+        """Springs whose end a lies in rows ``[lo, hi)``, computed on a copy of
+        the rows they touch laid out component by component (x, y, z, vx, vy,
+        vz rows), where every load in the inner loop is contiguous; the forces
+        are added back to ``f3`` at the end."""
+        ny, nx, _ = x3.shape
+        r0, r1 = max(lo - 1, 0), min(hi + 2, ny)
+        s = np.empty((6, r1 - r0, nx))
+        for r in range(r1 - r0):
+            xr, vr = x3[r0 + r], v3[r0 + r]
+            for i in range(nx):
+                s[0, r, i] = xr[i, 0]
+                s[1, r, i] = xr[i, 1]
+                s[2, r, i] = xr[i, 2]
+                s[3, r, i] = vr[i, 0]
+                s[4, r, i] = vr[i, 1]
+                s[5, r, i] = vr[i, 2]
+        f = np.zeros((3, r1 - r0, nx))
+        tmp = np.empty((3, nx))
+        for g in range(stiffness.shape[0]):
+            a0, a1, dj, di = geometry[g, 0], geometry[g, 1], geometry[g, 2], geometry[g, 3]
+            rows, cols = extent[g, 0], extent[g, 1]
+            b1 = a1 + di
+            for r in range(max(lo - a0, 0), min(hi - a0, rows)):
+                ja = a0 + r - r0
+                jb = ja + dj
+                kr, cr, lr = stiffness[g, r], damping[g, r], rest[g, r]
+                xa, ya, za = s[0, ja, a1:], s[1, ja, a1:], s[2, ja, a1:]
+                ua, va, wa = s[3, ja, a1:], s[4, ja, a1:], s[5, ja, a1:]
+                xb, yb, zb = s[0, jb, b1:], s[1, jb, b1:], s[2, jb, b1:]
+                ub, vb, wb = s[3, jb, b1:], s[4, jb, b1:], s[5, jb, b1:]
+                for q in range(cols):
+                    dx = xb[q] - xa[q]
+                    dy = yb[q] - ya[q]
+                    dz = zb[q] - za[q]
+                    length = np.sqrt(dx * dx + dy * dy + dz * dz)
+                    inv = 1.0 / max(length, 1e-12)
+                    closing = (ub[q] - ua[q]) * dx + (vb[q] - va[q]) * dy + (wb[q] - wa[q]) * dz
+                    pull = (kr[q] * (length - lr[q]) + cr[q] * closing * inv) * inv
+                    tmp[0, q] = pull * dx
+                    tmp[1, q] = pull * dy
+                    tmp[2, q] = pull * dz
+                for d in range(3):  # separate loops: end a and end b may be the same row
+                    fa = f[d, ja, a1:]
+                    for q in range(cols):
+                        fa[q] += tmp[d, q]
+                    fb = f[d, jb, b1:]
+                    for q in range(cols):
+                        fb[q] -= tmp[d, q]
+        for r in range(r1 - r0):
+            fr = f3[r0 + r]
+            for i in range(nx):
+                fr[i, 0] += f[0, r, i]
+                fr[i, 1] += f[1, r, i]
+                fr[i, 2] += f[2, r, i]
 
     def _spring_forces(x3, v3, f3, stiffness, damping, rest, geometry, extent, blocks):
-        """Add every spring's force to ``f3``."""
+        """Add every spring's force to ``f3``: blocks of rows in two phases."""
         count = (blocks.size - 1) // 2
         for phase in range(2):
             for n in prange(count):
                 b = 2 * n + phase
-                lo, hi = blocks[b], blocks[b + 1]
-                tmp = np.empty((3, x3.shape[1]))
-                for g in range(stiffness.shape[0]):
-                    _spring_rows(
-                        x3,
-                        v3,
-                        f3,
-                        stiffness[g],
-                        damping[g],
-                        rest[g],
-                        geometry[g, 0],
-                        geometry[g, 1],
-                        geometry[g, 2],
-                        geometry[g, 3],
-                        extent[g, 0],
-                        extent[g, 1],
-                        lo,
-                        hi,
-                        tmp,
-                    )
+                _spring_block(
+                    x3,
+                    v3,
+                    f3,
+                    stiffness,
+                    damping,
+                    rest,
+                    geometry,
+                    extent,
+                    blocks[b],
+                    blocks[b + 1],
+                )
 
     def _add_body_forces(v3, f3, mass, gravity, air):
         """``f += m g - air m v`` (gravity and linear air damping)."""
