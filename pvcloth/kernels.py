@@ -189,25 +189,37 @@ if numba is not None:
                     blocks[b + 1],
                 )
 
-    def _add_body_forces(v3, f3, mass, gravity, air):
-        """``f += m g - air m v`` (gravity and linear air damping)."""
+    def _body_forces(v3, f3, mass, gravity, air):
+        """``f = m g - air m v``: gravity and linear air damping, written over
+        whatever ``f3`` held (so it needs no zeroing first)."""
         ny, nx, _ = f3.shape
         for j in prange(ny):
             for i in range(nx):
                 m = mass[j, i]
                 for d in range(3):
-                    f3[j, i, d] += m * (gravity[d] - air * v3[j, i, d])
+                    f3[j, i, d] = m * (gravity[d] - air * v3[j, i, d])
 
     def _kick_drift(x3, v3, f3, inv_mass, dt, x_out, v_out):
-        """``v' = v + dt f / m``, ``x' = x + dt v'`` (pinned points: 1/m = 0)."""
+        """``v' = v + dt f / m``, ``x' = x + dt v'`` (pinned points: 1/m = 0).
+        Returns the largest squared speed and the count of non-finite
+        values, for the divergence guard, at no extra pass."""
         ny, nx, _ = x3.shape
+        fastest = 0.0
+        bad = 0
         for j in prange(ny):
             for i in range(nx):
                 w = dt * inv_mass[j, i]
+                square = 0.0
                 for d in range(3):
                     vn = v3[j, i, d] + w * f3[j, i, d]
+                    xn = x3[j, i, d] + dt * vn
                     v_out[j, i, d] = vn
-                    x_out[j, i, d] = x3[j, i, d] + dt * vn
+                    x_out[j, i, d] = xn
+                    square += vn * vn
+                    if not (np.isfinite(vn) and np.isfinite(xn)):
+                        bad += 1
+                fastest = max(fastest, square)
+        return fastest, bad
 
     def _compile(function):
         """A serial and a threaded build of one kernel. Threads pay only on
@@ -218,7 +230,7 @@ if numba is not None:
         return serial, threaded
 
     _SPRINGS = _compile(_spring_forces)
-    _BODY = _compile(_add_body_forces)
+    _BODY = _compile(_body_forces)
     _KICK = _compile(_kick_drift)
 
 #: Grids with at least this many rows use the threaded kernels.
@@ -247,16 +259,17 @@ def spring_forces(plan: SpringPlan, x, v, f) -> None:
     )
 
 
-def add_body_forces(v, f, mass, gravity, air: float, shape) -> None:
-    """Add gravity and linear air damping to ``f``."""
+def body_forces(v, f, mass, gravity, air: float, shape) -> None:
+    """Set ``f`` to gravity plus linear air damping (the other forces add on)."""
     s3 = shape + (3,)
     _pick(_BODY, shape[0])(v.reshape(s3), f.reshape(s3), mass.reshape(shape), gravity, air)
 
 
-def kick_drift(x, v, f, inv_mass, dt: float, x_out, v_out, shape) -> None:
-    """The semi-implicit Euler update from the total force ``f``, into ``x_out, v_out``."""
+def kick_drift(x, v, f, inv_mass, dt: float, x_out, v_out, shape) -> tuple[float, bool]:
+    """The semi-implicit Euler update from the total force ``f``, into
+    ``x_out, v_out``; returns the largest speed and whether all is finite."""
     s3 = shape + (3,)
-    _pick(_KICK, shape[0])(
+    fastest, bad = _pick(_KICK, shape[0])(
         x.reshape(s3),
         v.reshape(s3),
         f.reshape(s3),
@@ -265,3 +278,4 @@ def kick_drift(x, v, f, inv_mass, dt: float, x_out, v_out, shape) -> None:
         x_out.reshape(s3),
         v_out.reshape(s3),
     )
+    return float(np.sqrt(fastest)), bad == 0

@@ -69,32 +69,33 @@ class Model:
 
     def compute_forces(self, x: np.ndarray, v: np.ndarray, out: np.ndarray | None = None):
         """Total force ``(N, 3)`` on every point (pins included)."""
+        if self._plan is not None:
+            f = np.empty_like(x) if out is None else out
+            self._compiled_forces(x, v, f)
+            return f
         f = np.zeros_like(x) if out is None else out
         if out is not None:
             f.fill(0.0)
-        if self._plan is not None:
-            self._compiled_forces(x, v, f)
-            return f
         for term in self.forces:
             term.accumulate(x, v, f)
         return f
 
     def _compiled_forces(self, x, v, f) -> None:
-        """Springs, gravity and air damping in compiled kernels; any other
-        term (wind) in NumPy."""
-        from .kernels import add_body_forces, spring_forces
+        """Gravity and air damping (written over ``f``) and springs in
+        compiled kernels; any other term (wind) adds on in NumPy."""
+        from .kernels import body_forces, spring_forces
 
-        spring_forces(self._plan, x, v, f)
         gravity, air = np.zeros(3), 0.0
         for term in self.forces:
             if isinstance(term, Gravity):
                 gravity = gravity + term.acceleration
             elif isinstance(term, AirDamping):
                 air += term.rate
-            elif not isinstance(term, Springs):
+        body_forces(v, f, self.mass, gravity, air, self.shape)
+        spring_forces(self._plan, x, v, f)
+        for term in self.forces:
+            if not isinstance(term, (Springs, Gravity, AirDamping)):
                 term.accumulate(x, v, f)
-        if air or gravity.any():
-            add_body_forces(v, f, self.mass, gravity, air, self.shape)
 
     def refresh(self) -> None:
         """Call after changing spring constants in place (the compiled

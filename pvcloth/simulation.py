@@ -184,7 +184,7 @@ class Simulation:
 
     @property
     def pinned_indices(self) -> np.ndarray:
-        return np.flatnonzero(self.control.pinned)
+        return self.control.pinned_index
 
     def scale_stiffness(self, factor: float) -> None:
         """Multiply every spring's stiffness and damping by ``factor`` (> 0),
@@ -244,7 +244,7 @@ class Simulation:
         self._owed = max(self._owed - n * self.dt, 0.0)
         if n == 0:
             return
-        pinned = np.flatnonzero(self.control.pinned)
+        pinned = self.control.pinned_index
         start = self.state.x[pinned].copy()
         goal = self.control.targets[pinned].copy()
         for s in range(1, n + 1):
@@ -253,7 +253,7 @@ class Simulation:
     def step(self) -> None:
         """One substep of ``dt``."""
         self._owed = 0.0
-        pinned = np.flatnonzero(self.control.pinned)
+        pinned = self.control.pinned_index
         self._substep(pinned, self.control.targets[pinned])
 
     def _substep(self, pinned: np.ndarray, pin_positions: np.ndarray) -> None:
@@ -269,12 +269,16 @@ class Simulation:
             new = self.integrator.step(model, state, self.control, dt)
             new.t = (self.steps + 1) * dt if self._uniform_clock(state) else state.t + dt
             if model.obstacles:
-                movable = np.flatnonzero(~self.control.pinned)
-                model.collide(state.x, new.x, new.v, movable, state.t, new.t)
+                model.collide(state.x, new.x, new.v, self.control.movable_index, state.t, new.t)
         new.x[pinned] = pin_positions
         new.v[pinned] = pin_velocity
-        speed = np.abs(new.v).max(initial=0.0)
-        if not speed <= SPEED_LIMIT or not np.isfinite(new.x).all():
+        if new.checked is not None and not model.obstacles:
+            speed, finite = new.checked  # pinned points included (their v is set above)
+            speed = speed if finite else math.inf
+        else:
+            speed = np.abs(new.v).max(initial=0.0)
+            finite = np.isfinite(new.x).all()
+        if not speed <= SPEED_LIMIT or not finite:
             raise DivergenceError(self._divergence_message(speed))
         self.state = new
         self.steps += 1

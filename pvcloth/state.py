@@ -19,6 +19,9 @@ class State:
     x: np.ndarray
     v: np.ndarray
     t: float = 0.0
+    #: ``(largest speed, all finite)`` if the integrator found them on the
+    #: way (the compiled step does), so the divergence guard need not look.
+    checked: tuple[float, bool] | None = None
 
     def copy(self) -> State:
         return State(self.x.copy(), self.v.copy(), self.t)
@@ -40,11 +43,17 @@ class Control:
         Target positions; only rows of pinned points are used.
     inv_mass : ndarray, shape (N,)
         Inverse masses with zeros at pinned points: what integrators use.
+    pinned_index, movable_index : ndarray of int
+        Indices of the pinned and of the free points (kept by :meth:`refresh`).
     """
 
     pinned: np.ndarray
     targets: np.ndarray
     inv_mass: np.ndarray
+
+    def __post_init__(self):
+        self.pinned_index = np.flatnonzero(self.pinned)
+        self.movable_index = np.flatnonzero(~self.pinned)
 
     @classmethod
     def from_model(cls, model) -> Control:
@@ -57,3 +66,5 @@ class Control:
         """Recompute ``inv_mass`` after ``pinned`` changed."""
         np.divide(1.0, model.mass, out=self.inv_mass)
         self.inv_mass[self.pinned] = 0.0
+        self.pinned_index = np.flatnonzero(self.pinned)
+        self.movable_index = np.flatnonzero(~self.pinned)

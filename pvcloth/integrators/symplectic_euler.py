@@ -29,8 +29,8 @@ class SymplecticEuler(Integrator):
 
             f = model.compute_forces(state.x, state.v)
             x, v = np.empty_like(state.x), np.empty_like(state.v)
-            kick_drift(state.x, state.v, f, control.inv_mass, dt, x, v, model.shape)
-            return State(x, v, state.t + dt)
+            checked = kick_drift(state.x, state.v, f, control.inv_mass, dt, x, v, model.shape)
+            return State(x, v, state.t + dt, checked)
         a = model.compute_forces(state.x, state.v)
         a *= control.inv_mass[:, None]
         v = state.v + dt * a
