@@ -6,6 +6,7 @@ decorate it with :func:`register` and import the module here.
 
 from . import (  # noqa: F401  (importing registers them)
     explicit_euler,
+    fast_mass_spring,
     implicit_euler,
     rk4,
     symplectic_euler,

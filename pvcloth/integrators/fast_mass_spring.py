@@ -1,0 +1,106 @@
+"""Liu, Bargteil, O'Brien and Kavan (2013), "Fast Simulation of Mass-Spring
+Systems": backward Euler solved by local/global iterations with one
+prefactorised matrix."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import splu
+
+from ..state import State
+from .base import Integrator, register
+
+
+@register
+class FastMassSpring(Integrator):
+    """Implicit (backward) Euler for the springs by block coordinate descent.
+
+    Backward Euler's step minimises ``|x - y|^2_M / (2 h^2) + E_springs(x)``
+    with ``y = x + h v + h^2 M^-1 f_other``. Liu et al. write each spring's
+    energy with an auxiliary direction ``d`` of the rest length and alternate:
+    *local*, ``d = L (x_i - x_j) / |x_i - x_j|`` for every spring; *global*,
+    the linear solve ``(M + h^2 K) x = M y + h^2 J d`` whose matrix (mass
+    plus the stiffness-weighted graph Laplacian, the same for x, y and z) is
+    constant, so it is factorised once and each iteration costs three
+    back-substitutions. Every iteration lowers the energy, so the step is
+    stable at any size; a few iterations give the look of implicit Euler
+    at a fraction of its cost, with more numerical damping when stopped early.
+
+    Spring dashpots are not modelled by the method (only air damping, gravity,
+    wind and other non-spring forces, taken explicitly in ``y``); pinned points
+    are held by leaving them out of the solve, and the factorisation is redone
+    when the set of pinned points (or a stiffness) changes.
+
+    Parameters
+    ----------
+    iterations : int
+        Local/global iterations per step (Liu et al. use about 10).
+    """
+
+    name = "fast_mass_spring"
+    order = 1
+    description = "Liu et al. 2013 local/global backward Euler, prefactorised; damps"
+
+    def __init__(self, iterations: int = 10):
+        self.iterations = iterations
+        self._key = None
+
+    def stable_dt(self, model, state, control) -> float:
+        return float("inf")  # each iteration lowers a bounded-below energy
+
+    # -- the constant parts ------------------------------------------------------
+
+    def _prepare(self, model, control, dt: float) -> None:
+        groups = [g for family in model.springs for g in family.groups]
+        k = np.concatenate([g.stiffness.ravel() for g in groups]) if groups else np.zeros(0)
+        key = (dt, control.pinned.tobytes(), k.tobytes())
+        if key == self._key:
+            return
+        n = model.n_points
+        ia = np.concatenate([g.ia for g in groups]) if groups else np.zeros(0, int)
+        ib = np.concatenate([g.ib for g in groups]) if groups else np.zeros(0, int)
+        rest = np.concatenate([g.rest.ravel() for g in groups]) if groups else np.zeros(0)
+        # Incidence: row s of G is e_a - e_b for spring s (a = ia, b = ib).
+        s = np.arange(ia.size)
+        incidence = sp.csr_matrix(
+            (np.r_[np.ones(s.size), -np.ones(s.size)], (np.r_[s, s], np.r_[ia, ib])),
+            shape=(s.size, n),
+        )
+        weighted = incidence.T @ sp.diags(k)  # J = G^T diag(k): (n, springs)
+        laplacian = (weighted @ incidence).tocsr()  # K = G^T diag(k) G
+        system = sp.diags(model.mass) + dt * dt * laplacian
+        free = np.flatnonzero(~control.pinned)
+        fixed = np.flatnonzero(control.pinned)
+        self._free, self._fixed = free, fixed
+        self._coupling = system[free][:, fixed].tocsr()  # moves pinned points to the rhs
+        self._lu = splu(system[free][:, free].tocsc())
+        self._jacobian = (dt * dt * weighted).tocsr()[free]
+        self._ia, self._ib, self._rest = ia, ib, rest
+        self._key = key
+
+    # -- a step ---------------------------------------------------------------------
+
+    def step(self, model, state, control, dt):
+        from ..forces import Springs
+
+        self._prepare(model, control, dt)
+        x, v = state.x, state.v
+        other = np.zeros_like(x)
+        for term in model.forces:
+            if not isinstance(term, Springs):
+                term.accumulate(x, v, other)
+        y = x + dt * v + dt * dt * other * control.inv_mass[:, None]
+        free, fixed = self._free, self._fixed
+        pinned_next = x[fixed] + dt * v[fixed]  # the simulation set their velocity
+        rhs_base = model.mass[free, None] * y[free] - self._coupling @ pinned_next
+        guess = y.copy()
+        guess[fixed] = pinned_next
+        for _ in range(self.iterations):
+            d = guess[self._ia] - guess[self._ib]
+            length = np.linalg.norm(d, axis=1)
+            d *= (self._rest / np.maximum(length, 1e-12))[:, None]
+            rhs = rhs_base + self._jacobian @ d
+            guess[free] = self._lu.solve(rhs)
+        v_new = (guess - x) / dt
+        return State(guess, v_new, state.t + dt)
