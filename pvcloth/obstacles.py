@@ -236,12 +236,16 @@ class Sphere(Obstacle):
 
 
 class Box(Obstacle):
-    """A box of edge lengths ``size`` along its own axes."""
+    """A box of edge lengths ``size`` along its own axes, turned by ``angles``
+    (degrees about the fixed x, y and z axes, in that order)."""
 
     name = "box"
 
-    def __init__(self, size, **common):
-        super().__init__(**common)
+    def __init__(self, size, angles=(0.0, 0.0, 0.0), **common):
+        super().__init__(
+            rotation=Rotation.from_euler("xyz", angles, degrees=True).as_matrix(), **common
+        )
+        self.angles = tuple(angles)
         self.size = np.asarray(size, dtype=float)
         self.half = 0.5 * self.size + self.thickness
 
@@ -277,7 +281,10 @@ class Box(Obstacle):
         return outside + np.minimum(q.max(axis=1), 0.0)
 
     def _shape_text(self):
-        return "box {:g} x {:g} x {:g} m at ({:g}, {:g}, {:g})".format(*self.size, *self.center)
+        text = "box {:g} x {:g} x {:g} m at ({:g}, {:g}, {:g})".format(*self.size, *self.center)
+        if any(self.angles):
+            text += ", turned ({:g}, {:g}, {:g}) deg about x, y, z".format(*self.angles)
+        return text
 
 
 class Ground(Obstacle):
@@ -337,6 +344,5 @@ def build_obstacle(spec) -> Obstacle:
     if spec.type == "sphere":
         return Sphere(spec.radius, **common)
     if spec.type == "box":
-        rotation = Rotation.from_euler("xyz", spec.rotation, degrees=True).as_matrix()
-        return Box(spec.size, rotation=rotation, **common)
+        return Box(spec.size, spec.rotation, **common)
     return Ground(spec.normal, **common)
