@@ -111,6 +111,7 @@ class Springs:
     shape: tuple[int, int]  # (ny, nx)
     groups: list[_SpringGroup] = field(default_factory=list)
     name: str = "springs"
+    _pattern: BlockPattern | None = field(default=None, repr=False, compare=False)
 
     @classmethod
     def build(cls, family, positions, stiffness, damping, spacing) -> Springs:
@@ -193,8 +194,10 @@ class Springs:
         transverse = np.clip(1.0 - rest / np.maximum(length, TINY_LENGTH), 0.0, None)
         eye = np.eye(3)[None]
         stiff = k[:, None, None] * (uu + transverse[:, None, None] * (eye - uu))
-        dfdx = pair_blocks(ia, ib, stiff, x.shape[0])
-        dfdv = pair_blocks(ia, ib, c[:, None, None] * uu, x.shape[0]) if self.damped else None
+        if self._pattern is None:  # the springs never change: neither does the pattern
+            self._pattern = BlockPattern(ia, ib, x.shape[0])
+        dfdx = self._pattern.assemble(stiff)
+        dfdv = self._pattern.assemble(c[:, None, None] * uu) if self.damped else None
         return dfdx, dfdv
 
     def describe(self) -> str:
@@ -202,30 +205,41 @@ class Springs:
         return f"{self.name}: {self.count} springs, k up to {k:g} N/m"
 
 
-def pair_blocks(ia, ib, blocks, n_points) -> sp.csr_matrix:
-    """Assemble ``dF/dx``-shaped blocks of two-point interactions.
+class BlockPattern:
+    """The sparsity pattern of ``dF/dx``-shaped matrices of two-point
+    interactions, computed once: every later assembly is one ``bincount``
+    into the CSR arrays instead of a COO-to-CSR conversion with sorting.
 
     Each 3x3 ``block`` is ``dF_a/dx_b``; the four blocks of a pair are
     ``(a,a) = -B, (a,b) = B, (b,a) = B, (b,b) = -B``.
     """
-    rows3 = np.arange(3)
 
-    def coords(p, q):
-        r = (3 * p[:, None, None] + rows3[None, :, None]).repeat(3, axis=2)
-        s = (3 * q[:, None, None] + rows3[None, None, :]).repeat(3, axis=1)
-        return r, s
+    def __init__(self, ia, ib, n_points: int):
+        rows3 = np.arange(3)
+        size = 3 * n_points
+        keys = []
+        for p, q in ((ia, ia), (ia, ib), (ib, ia), (ib, ib)):
+            r = 3 * p[:, None, None] + rows3[None, :, None]
+            c = 3 * q[:, None, None] + rows3[None, None, :]
+            keys.append((r * size + c).ravel())
+        unique, self.slot = np.unique(np.concatenate(keys), return_inverse=True)
+        self.indices = (unique % size).astype(np.int32)
+        self.indptr = np.searchsorted(unique // size, np.arange(size + 1)).astype(np.int32)
+        self.shape = (size, size)
+        self.pairs = ia.size
 
-    parts = [(ia, ia, -blocks), (ia, ib, blocks), (ib, ia, blocks), (ib, ib, -blocks)]
-    rows, cols, data = [], [], []
-    for p, q, b in parts:
-        r, s = coords(p, q)
-        rows.append(r.ravel())
-        cols.append(s.ravel())
-        data.append(b.ravel())
-    size = 3 * n_points
-    return sp.csr_matrix(
-        (np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))), shape=(size, size)
-    )
+    def assemble(self, blocks: np.ndarray) -> sp.csr_matrix:
+        """The matrix for per-pair ``blocks`` of shape ``(pairs, 3, 3)``."""
+        b = blocks.reshape(self.pairs, 9)
+        values = np.concatenate([-b, b, b, -b]).ravel()
+        data = np.bincount(self.slot, weights=values, minlength=self.indices.size)
+        return sp.csr_matrix((data, self.indices, self.indptr), shape=self.shape)
+
+
+def pair_blocks(ia, ib, blocks, n_points) -> sp.csr_matrix:
+    """Assemble ``dF/dx``-shaped blocks of two-point interactions once (see
+    :class:`BlockPattern`, which keeps the pattern for repeated assembly)."""
+    return BlockPattern(ia, ib, n_points).assemble(blocks)
 
 
 @dataclass
