@@ -144,11 +144,7 @@ class ClothApp:
             self.frame_ms = 0.8 * self.frame_ms + 0.2 * 1e3 * (now - self._last_frame)
         self._last_frame = now
         if not self.paused:
-            try:
-                self._advance(self.speed / self.fps)
-            except DivergenceError as error:
-                self.paused = True  # the state is the last good step; b restarts
-                self.message = f"DIVERGED - press b to restart. {error}"
+            self._guarded(self._advance, self.speed / self.fps)
         self.view.update()
         self._update_status()
         start = time.perf_counter()
@@ -195,15 +191,26 @@ class ClothApp:
         self.paused = not self.paused
         self._update_status()
 
+    def _guarded(self, advance, seconds: float) -> None:
+        """Advance; a divergence pauses with a message instead of raising
+        out of a VTK callback (the state is the last good step)."""
+        try:
+            advance(seconds)
+        except DivergenceError as error:
+            self.paused = True
+            self.message = f"DIVERGED - press b to restart. {error}"
+
     def single_step(self):
         self.paused = True
-        self.sim.advance(1.0 / self.fps)
+        self._guarded(self.sim.advance, 1.0 / self.fps)
         self.view.update()
         self._update_status()
 
     def restart(self):
         self.style.grabbed = None  # a point held by the mouse is released too
         self.sim.reset()
+        if self.message:  # restarting after a divergence runs again
+            self.paused = False
         self.message = ""
         self.view.update()
         self._update_status()
