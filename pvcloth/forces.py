@@ -236,12 +236,6 @@ class BlockPattern:
         return sp.csr_matrix((data, self.indices, self.indptr), shape=self.shape)
 
 
-def pair_blocks(ia, ib, blocks, n_points) -> sp.csr_matrix:
-    """Assemble ``dF/dx``-shaped blocks of two-point interactions once (see
-    :class:`BlockPattern`, which keeps the pattern for repeated assembly)."""
-    return BlockPattern(ia, ib, n_points).assemble(blocks)
-
-
 @dataclass
 class Wind:
     """Aerodynamic drag and lift of (possibly gusty) wind on each triangle.
