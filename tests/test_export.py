@@ -14,9 +14,19 @@ from pvcloth.cli import main
 from pvcloth.export import ExportInterrupted, export
 
 
+def cloth():
+    """The small damped cloth every export test writes."""
+    return Simulation(small_scene(6, damping=0.1, dt=5e-4))
+
+
+def exported(path):
+    """Export 4 frames at 20 fps of :func:`cloth` to ``path``."""
+    return export(cloth(), path, frames=4, fps=20, progress=False)
+
+
 def recorded(frames=4, fps=20):
     """Positions and times of an uninterrupted run, frame by frame."""
-    sim = Simulation(small_scene(6, damping=0.1, dt=5e-4))
+    sim = cloth()
     out = [(sim.time, sim.positions.copy())]
     for _ in range(frames - 1):
         sim.advance(1 / fps)
@@ -28,13 +38,7 @@ def test_pvd_series_reads_back_in_pyvista_and_meshio(tmp_path):
     import meshio
     import pyvista as pv
 
-    path = export(
-        Simulation(small_scene(6, damping=0.1, dt=5e-4)),
-        tmp_path / "cloth.pvd",
-        frames=4,
-        fps=20,
-        progress=False,
-    )
+    path = exported(tmp_path / "cloth.pvd")
     expected = recorded()
     reader = pv.get_reader(path)
     np.testing.assert_allclose(reader.time_values, [t for t, _ in expected], rtol=1e-12)
@@ -51,13 +55,7 @@ def test_xdmf_time_series_round_trip(tmp_path):
     import meshio
     import pyvista as pv
 
-    path = export(
-        Simulation(small_scene(6, damping=0.1, dt=5e-4)),
-        tmp_path / "cloth.xdmf",
-        frames=4,
-        fps=20,
-        progress=False,
-    )
+    path = exported(tmp_path / "cloth.xdmf")
     expected = recorded()
     with meshio.xdmf.TimeSeriesReader(path) as reader:
         rest, _ = reader.read_points_cells()
@@ -75,13 +73,7 @@ def test_xdmf_time_series_round_trip(tmp_path):
 def test_obj_sequence_for_blender(tmp_path):
     import meshio
 
-    folder = export(
-        Simulation(small_scene(6, damping=0.1, dt=5e-4)),
-        tmp_path / "cloth.obj",
-        frames=3,
-        fps=20,
-        progress=False,
-    )
+    folder = export(cloth(), tmp_path / "cloth.obj", frames=3, fps=20, progress=False)
     files = sorted(folder.glob("*.obj"))
     assert len(files) == 3
     expected = recorded(3)
