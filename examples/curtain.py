@@ -9,7 +9,6 @@ import sys
 import numpy as np
 
 import pvcloth
-from pvcloth.movie import render
 
 scene = pvcloth.Scene(
     name="curtain",
@@ -30,5 +29,5 @@ lower = np.arange(nx * ny) < nx * ny // 2
 sim.state.v[lower, 1] = 1.5
 
 output = sys.argv[1] if len(sys.argv) > 1 else "curtain.png"
-render(sim, output, frames=20, fps=30, size=(480, 480))
+pvcloth.render(sim, output, frames=20, fps=30, size=(480, 480))
 print(f"wrote {output} at t = {sim.time:.2f} s")

@@ -6,13 +6,16 @@ Run:  python examples/pinned_and_dragged.py [OUTPUT.gif]
 """
 
 import sys
+from pathlib import Path
 
 import numpy as np
 
 import pvcloth
-from pvcloth.movie import render
 
-scene = pvcloth.load_scene("data/scenes/hanging.toml").replace(
+# The bundled scene, found from this file so the script runs from any folder.
+SCENE = Path(__file__).resolve().parents[1] / "data" / "scenes" / "hanging.toml"
+
+scene = pvcloth.load_scene(SCENE).replace(
     cloth=pvcloth.ClothSpec(resolution=(24, 24), mass=0.2, orientation="vertical")
 )
 sim = pvcloth.Simulation(scene)
@@ -28,5 +31,5 @@ def pull_corner(sim, frame):
 
 
 output = sys.argv[1] if len(sys.argv) > 1 else "dragged.gif"
-render(sim, output, frames=30, fps=20, size=(400, 400), before_frame=pull_corner)
+pvcloth.render(sim, output, frames=30, fps=20, size=(400, 400), before_frame=pull_corner)
 print(f"wrote {output}; corner at {np.round(sim.positions[sim.point_index(corner)], 3)}")

@@ -4,7 +4,18 @@ Scene -> model and state -> integrator -> simulation -> view, movie,
 interaction, export, analysis. See ``docs/architecture.md``.
 """
 
-from .errors import DivergenceError, PvclothError, SceneError
+from importlib import metadata as _metadata
+
+from .errors import (
+    CheckpointError,
+    DisplayError,
+    DivergenceError,
+    ExportInterrupted,
+    MovieInterrupted,
+    PvclothError,
+    SceneError,
+    SweepError,
+)
 from .integrators import INTEGRATORS, Integrator, get_integrator
 from .model import Model, build_model
 from .scene import (
@@ -21,16 +32,41 @@ from .scene import (
 from .simulation import Simulation
 from .state import Control, State
 
-__version__ = "0.1.0"
+try:  # one source for the version: the installed package's metadata (pyproject.toml)
+    __version__ = _metadata.version("pvcloth")
+except _metadata.PackageNotFoundError:  # running from a source tree that was never installed
+    __version__ = "0+unknown"
+
+#: Output functions, imported on first use so that ``import pvcloth`` loads no
+#: drawing or file-format library (PEP 562 module ``__getattr__``).
+_LAZY = {
+    "render": ("movie", "render"),
+    "export": ("timeseries", "export"),
+    "save_checkpoint": ("checkpoint", "save_checkpoint"),
+    "load_checkpoint": ("checkpoint", "load_checkpoint"),
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        module, attribute = _LAZY[name]
+        return getattr(importlib.import_module(f".{module}", __name__), attribute)
+    raise AttributeError(f"module 'pvcloth' has no attribute {name!r}")
 
 
 __all__ = [
     "INTEGRATORS",
+    "CheckpointError",
     "ClothSpec",
     "Control",
+    "DisplayError",
     "DivergenceError",
+    "ExportInterrupted",
     "Integrator",
     "Model",
+    "MovieInterrupted",
     "ObstacleSpec",
     "PinSpec",
     "PvclothError",
@@ -41,8 +77,14 @@ __all__ = [
     "SpringSpec",
     "SpringsSpec",
     "State",
+    "SweepError",
     "WindSpec",
+    "__version__",
     "build_model",
+    "export",
     "get_integrator",
+    "load_checkpoint",
     "load_scene",
+    "render",
+    "save_checkpoint",
 ]

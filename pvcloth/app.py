@@ -8,11 +8,15 @@ queueing ever more substeps.
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
 import dataclasses
 import math
+import os
+import sys
 import time
 
-from .errors import DivergenceError
+from .errors import DisplayError, DivergenceError
 from .integrators import INTEGRATORS
 from .interaction import ClothDragStyle
 from .scene import WindSpec
@@ -36,6 +40,38 @@ HELP = "drag the cloth with the left button (Shift+release: leave pinned)\n" + "
 )
 
 
+_NO_DISPLAY_HINT = (
+    "On a machine without a screen, run it inside a virtual one: "
+    "xvfb-run -a pvcloth run SCENE (Debian/Ubuntu: apt-get install xvfb xauth)."
+)
+
+
+def check_display() -> None:
+    """Raise :class:`DisplayError` when a window cannot be opened.
+
+    On Linux a window needs an X server (VTK's pip wheel draws through X).
+    With no ``DISPLAY``, or one that no server answers, VTK only prints
+    "bad X server connection" and its event loop returns at once, so the
+    window would close silently; this asks Xlib directly instead.
+    """
+    if not sys.platform.startswith("linux"):
+        return
+    display = os.environ.get("DISPLAY")
+    if not display:
+        raise DisplayError(f"no display: DISPLAY is not set. {_NO_DISPLAY_HINT}")
+    library = ctypes.util.find_library("X11")
+    if library is None:  # cannot ask; VTK needs libX11 for a window anyway
+        raise DisplayError(f"no X11 library (libX11) to open a window with. {_NO_DISPLAY_HINT}")
+    xlib = ctypes.CDLL(library)
+    xlib.XOpenDisplay.restype = ctypes.c_void_p
+    xlib.XOpenDisplay.argtypes = [ctypes.c_char_p]
+    xlib.XCloseDisplay.argtypes = [ctypes.c_void_p]
+    connection = xlib.XOpenDisplay(display.encode())
+    if not connection:
+        raise DisplayError(f"cannot connect to the X display {display!r}. {_NO_DISPLAY_HINT}")
+    xlib.XCloseDisplay(connection)
+
+
 class ClothApp:
     """A PyVista window running a simulation that the mouse can drag.
 
@@ -53,10 +89,17 @@ class ClothApp:
 
     Examples
     --------
+    ``pvcloth run SCENE`` opens the window; from Python, ``ClothApp(sim).run()``
+    does. Off-screen, a frame can be driven by hand:
+
     >>> import pvcloth
     >>> from pvcloth.app import ClothApp
-    >>> app = ClothApp(pvcloth.Simulation.from_file("data/scenes/hanging.toml"))  # doctest: +SKIP
-    >>> app.run()  # doctest: +SKIP
+    >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
+    >>> app = ClothApp(sim, off_screen=True, window_size=(320, 240))
+    >>> app.frame()  # advance by at most one frame of real time, then draw
+    >>> 0 < sim.time <= 1 / 30
+    True
+    >>> app.plotter.close()
     """
 
     def __init__(

@@ -77,13 +77,16 @@ def cmd_render(args) -> None:
 
 
 def cmd_run(args) -> None:
-    from .app import ClothApp
+    from .app import ClothApp, check_display
+    from .movie import parse_size
 
-    ClothApp(_simulation(args), fps=args.fps).run()
+    check_display()  # before building anything: VTK cannot say it has no screen
+    app = ClothApp(_simulation(args), fps=args.fps, window_size=parse_size(args.size))
+    app.run()
 
 
 def cmd_export(args) -> None:
-    from .export import export
+    from .timeseries import export
 
     sim = _simulation(args)
     where = export(sim, args.output, frames=args.frames, fps=args.fps, progress=not args.quiet)
@@ -142,8 +145,23 @@ def cmd_sweep(args) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from . import __version__
+
     parser = argparse.ArgumentParser(prog="pvcloth", description="Mass-spring cloth with PyVista.")
+    parser.add_argument("--version", action="version", version=f"pvcloth {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
+
+    run = sub.add_parser(
+        "run",
+        help="open the interactive window: drag the cloth with the mouse",
+        description="Animate a scene in a window; press on the cloth to drag a point "
+        "(the keys are listed in the window; q quits). Needs a display (on a machine without one: "
+        "xvfb-run -a pvcloth run SCENE).",
+    )
+    _add_overrides(run)
+    run.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
+    run.add_argument("--size", default="1024x768", help="window WIDTHxHEIGHT (default 1024x768)")
+    run.set_defaults(func=cmd_run)
 
     info = sub.add_parser("info", help="print the model a scene builds")
     _add_overrides(info)

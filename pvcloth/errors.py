@@ -1,10 +1,13 @@
 """The exceptions pvcloth raises on purpose.
 
 Every error a user can cause by what they ask for is a :class:`PvclothError`,
-so a caller can catch the project's errors without catching NumPy's.
+so a caller can catch the project's errors without catching NumPy's. All of
+them live here and are importable from ``pvcloth``.
 """
 
 from __future__ import annotations
+
+from pathlib import Path
 
 
 class PvclothError(Exception):
@@ -39,3 +42,33 @@ class DivergenceError(PvclothError, FloatingPointError):
     The simulation's state is left at the last good step, so whatever was
     written from it so far stays valid.
     """
+
+
+class MovieInterrupted(PvclothError):
+    """A movie stopped early. ``path`` is the valid partial movie, or ``None``
+    if no frame was finished and nothing was written."""
+
+    def __init__(self, message: str, path: Path | None, frames: int):
+        super().__init__(message)
+        self.path = path
+        self.frames = frames
+
+
+class ExportInterrupted(PvclothError):
+    """An export stopped early; ``frames`` were written and stay readable."""
+
+    def __init__(self, message: str, frames: int):
+        super().__init__(message)
+        self.frames = frames
+
+
+class CheckpointError(PvclothError):
+    """A checkpoint file is missing, damaged, foreign or inconsistent."""
+
+
+class SweepError(PvclothError):
+    """A sweep that cannot run as asked (bad ``--set``, missing Dask...)."""
+
+
+class DisplayError(PvclothError):
+    """There is no screen to open the interactive window on."""

@@ -74,3 +74,40 @@ def border_factor(offset: tuple[int, int], shape: tuple[int, int]) -> np.ndarray
     elif di == 0:  # springs along y: half on the first and last columns
         factor *= trapezoid_weights(nx)[None, :]
     return factor[a]
+
+
+def point_stretch(x: np.ndarray, rest: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Local stretch of every point: the mean, over the grid edges that meet
+    at the point (2 to 4), of current length over rest length.
+
+    Parameters
+    ----------
+    x, rest : ndarray, shape (N, 3)
+        Current and rest positions in metres, flat index ``i + nx * j``.
+    shape : (int, int)
+        ``(ny, nx)``.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        1 where the cloth is at its rest length, above 1 where it is
+        stretched, below 1 where it is compressed (dimensionless).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pvcloth.grid import point_stretch
+    >>> rest = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+    >>> point_stretch(rest * [2, 1, 1], rest, (2, 2))  # twice as wide
+    array([1.5, 1.5, 1.5, 1.5])
+    """
+    ny, nx = shape
+    x, rest = x.reshape(ny, nx, 3), rest.reshape(ny, nx, 3)
+    total = np.zeros((ny, nx))
+    count = np.zeros((ny, nx))
+    for a, b in (pair_slices((1, 0), shape), pair_slices((0, 1), shape)):
+        ratio = np.linalg.norm(x[b] - x[a], axis=-1) / np.linalg.norm(rest[b] - rest[a], axis=-1)
+        for end in (a, b):
+            total[end] += ratio
+            count[end] += 1
+    return (total / count).ravel()

@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 
+from .simulation import STABLE_SHARE
+
 
 def describe(sim) -> str:
     """A few lines that say what the model built and how it will be stepped.
@@ -50,17 +52,26 @@ def describe(sim) -> str:
             else "numpy (set PVCLOTH_BACKEND=numba or install numba for compiled kernels)"
         )
     )
+    stable = sim.stable_dt()
+    if sim.dt_source == "auto":
+        frame = math.isinf(stable)
+        origin = "automatic: " + (
+            "one 1/60 s frame" if frame else "at most half the stable step, dividing 1/60 s"
+        )
+    elif sim.dt_source == "substep":
+        origin = f"substeps of the given {sim.requested_dt:.4g} s"
+    else:
+        origin = "as given"
     lines.append(
         f"integrator  {sim.integrator.name} (order {sim.integrator.order}: "
-        f"{sim.integrator.description}), dt = {sim.dt:.4g} s"
+        f"{sim.integrator.description}), dt = {sim.dt:.4g} s ({origin})"
     )
-    stable = sim.stable_dt()
     if stable == 0.0:
         lines.append("stable dt   none: the stiffest mode is undamped and grows at any step")
     elif math.isinf(stable):
         lines.append("stable dt   unlimited (stable at any step on the linearised cloth)")
     else:
-        verdict = "ok" if sim.dt <= stable else "TOO LARGE: expect divergence"
+        verdict = "ok" if sim.dt <= STABLE_SHARE * stable else "TOO LARGE: expect divergence"
         share = sim.dt / stable
         lines.append(
             f"stable dt   about {stable:.4g} s at rest (dt is {share:.2f} of it: {verdict})"

@@ -16,19 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import PvclothError, SceneError
+from .errors import MovieInterrupted, SceneError
 
 FORMATS = (".gif", ".mp4", ".png")
-
-
-class MovieInterrupted(PvclothError):
-    """A movie stopped early. ``path`` is the valid partial movie, or ``None``
-    if no frame was finished and nothing was written."""
-
-    def __init__(self, message: str, path: Path | None, frames: int):
-        super().__init__(message)
-        self.path = path
-        self.frames = frames
 
 
 @dataclass
@@ -49,6 +39,14 @@ class RenderStats:
         medians = {k: 1e3 * float(np.median(v)) if v else 0.0 for k, v in stages.items()}
         medians["encoding"] += 1e3 * self.closing / max(self.frames, 1)
         return medians
+
+    def __repr__(self) -> str:
+        ms = self.medians_ms()
+        return (
+            f"<RenderStats {self.path.name}: {self.frames} frames; median ms per frame: "
+            f"physics {ms['physics']:.1f}, drawing {ms['drawing']:.1f}, "
+            f"encoding {ms['encoding']:.1f}>"
+        )
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -144,12 +142,13 @@ def render(
     Examples
     --------
     >>> import pvcloth
-    >>> from pvcloth.movie import render
-    >>> sim = pvcloth.Simulation.from_file("data/scenes/hanging.toml")  # doctest: +SKIP
-    >>> render(sim, "hanging.gif", frames=60)  # doctest: +SKIP
+    >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(12, 12))))
+    >>> stats = pvcloth.render(sim, "hanging.gif", frames=6, size=(160, 120), progress=False)
+    >>> stats.path.name, stats.frames, round(sim.time, 3)
+    ('hanging.gif', 6, 0.167)
     """
     import pyvista as pv
-    from tqdm import tqdm
+    from tqdm.auto import tqdm
 
     from .view import ClothView
 
@@ -164,7 +163,9 @@ def render(
     partial = path.with_name(f".{path.stem}.partial{path.suffix}")
     stats = RenderStats(path, 0)
 
-    plotter = pv.Plotter(off_screen=True, window_size=list(size))
+    # notebook=False: in Jupyter, show() would otherwise put a picture or a
+    # widget of this plotter in the cell, besides the movie asked for.
+    plotter = pv.Plotter(off_screen=True, notebook=False, window_size=list(size))
     writer = None
     try:
         view = ClothView(sim, plotter)

@@ -194,22 +194,35 @@ class SolverSpec:
     ----------
     integrator : str
         A name from :data:`pvcloth.INTEGRATORS`.
-    dt : float
-        Step in seconds (0 < dt <= 10).
+    dt : float, optional
+        Step in seconds (0 < dt <= 10). Left out (``None``), the simulation
+        takes the largest step that is at most half the integrator's estimated
+        stable step for this cloth and divides a 1/60 s frame evenly (the
+        frame itself for an integrator stable at any step).
     stability : {"refuse", "substep", "ignore"}
+        What to do with a given step above 0.8 of the estimated stable step:
         ``"refuse"`` raises a SceneError naming a stable step; ``"substep"``
         splits each step into equal substeps at most half the stable step;
         ``"ignore"`` runs as asked (the divergence guard still stops a blow-up).
+
+    Examples
+    --------
+    >>> from pvcloth import SolverSpec
+    >>> SolverSpec("verlet").dt is None  # chosen from the stable step
+    True
+    >>> SolverSpec("rk4", dt=1e-4).dt
+    0.0001
     """
 
     integrator: str = "symplectic_euler"
-    dt: float = 1e-3
+    dt: float | None = None
     stability: str = "refuse"
 
     def __post_init__(self):
         _set(self, "stability", choice("stability", self.stability, STABILITY_POLICIES))
         _set(self, "integrator", choice("integrator", self.integrator, sorted(INTEGRATORS)))
-        _set(self, "dt", real("dt", self.dt, minimum=0.0, exclusive=True, maximum=10.0))
+        if self.dt is not None:
+            _set(self, "dt", real("dt", self.dt, minimum=0.0, exclusive=True, maximum=10.0))
 
 
 @dataclass(frozen=True)
@@ -504,6 +517,88 @@ class Scene:
         """A copy with top-level fields replaced (validated again)."""
         return dataclasses.replace(self, **changes)
 
+    # -- how it reads in a terminal and a notebook ---------------------------
+
+    def summary(self) -> list[tuple[str, str]]:
+        """``(topic, text)`` rows that say what the scene asks for, in units.
+
+        Examples
+        --------
+        >>> from pvcloth import Scene
+        >>> dict(Scene().summary())["solver"]
+        'symplectic_euler, dt automatic (at most half the stable step), stability refuse'
+        """
+        cloth, solver = self.cloth, self.solver
+        springs = [
+            f"{f.name} {spec.stiffness:g} N/m, damping {spec.damping:g} N s/m"
+            for f in fields(self.springs)
+            if (spec := getattr(self.springs, f.name)) is not None
+        ]
+        pins = [
+            f"{label} {', '.join(str(v) for v in values)}"
+            for label, values in (
+                ("corners", self.pins.corners),
+                ("edges", self.pins.edges),
+                ("points", self.pins.points),
+                ("indices", self.pins.indices),
+            )
+            if values
+        ]
+        step = (
+            "automatic (at most half the stable step)" if solver.dt is None else f"{solver.dt:g} s"
+        )
+        wind = "none"
+        if self.wind is not None:
+            wind = f"{_vec(self.wind.velocity)} m/s, drag {self.wind.drag:g}"
+            wind += f", lift {self.wind.lift:g}" if self.wind.lift else ""
+            wind += f", gusts ±{self.wind.gust:.0%}" if self.wind.gust else ""
+        return [
+            (
+                "cloth",
+                f"{cloth.resolution[0]} x {cloth.resolution[1]} points, {cloth.size[0]:g} x "
+                f"{cloth.size[1]:g} m, {cloth.mass:g} kg, {cloth.orientation} "
+                f"at {_vec(cloth.center)} m",
+            ),
+            ("springs", "; ".join(springs) or "none"),
+            ("pins", "; ".join(pins) or "none"),
+            ("solver", f"{solver.integrator}, dt {step}, stability {solver.stability}"),
+            ("gravity", f"{_vec(self.gravity)} m/s^2, air damping {self.air_damping:g} 1/s"),
+            ("wind", wind),
+            ("obstacles", "; ".join(_obstacle_text(o) for o in self.obstacles) or "none"),
+        ]
+
+    def __repr__(self) -> str:
+        rows = "".join(f"\n  {topic:<10} {text}" for topic, text in self.summary())
+        return f"Scene({self.name!r}){rows}"
+
+    def _repr_html_(self) -> str:
+        return _html_table(f"Scene {self.name!r}", self.summary())
+
+
+def _obstacle_text(obstacle: ObstacleSpec) -> str:
+    where = f"at {_vec(obstacle.center)} m" + (" (moving)" if obstacle.path else "")
+    if obstacle.type == "sphere":
+        return f"sphere of radius {obstacle.radius:g} m {where}"
+    if obstacle.type == "box":
+        return f"box {_vec(obstacle.size)} m {where}"
+    return f"ground through {_vec(obstacle.center)} m, normal {_vec(obstacle.normal)}"
+
+
+def _vec(values) -> str:
+    return "(" + ", ".join(f"{v:g}" for v in values) + ")"
+
+
+def _html_table(title: str, rows) -> str:
+    """A small HTML table for notebooks (the escaping is html.escape's)."""
+    import html
+
+    body = "".join(
+        f"<tr><th style='text-align:left'>{html.escape(k)}</th>"
+        f"<td style='text-align:left'>{html.escape(v)}</td></tr>"
+        for k, v in rows
+    )
+    return f"<table><caption><b>{html.escape(title)}</b></caption>{body}</table>"
+
 
 _NESTED = {"cloth": ClothSpec, "springs": SpringsSpec, "pins": PinSpec, "solver": SolverSpec}
 
@@ -561,9 +656,14 @@ def load_scene(path: str | Path) -> Scene:
     Examples
     --------
     >>> import pvcloth
-    >>> scene = pvcloth.load_scene("data/scenes/hanging.toml")  # doctest: +SKIP
-    >>> scene.name  # doctest: +SKIP
-    'hanging'
+    >>> from pathlib import Path
+    >>> _ = Path("small.toml").write_text("cloth.resolution = [8, 8]")
+    >>> scene = pvcloth.load_scene("small.toml")
+    >>> scene.name, scene.cloth.resolution
+    ('small', (8, 8))
+
+    The bundled scenes are in the repository's ``data/scenes`` folder, e.g.
+    ``pvcloth.load_scene("data/scenes/hanging.toml")``.
     """
     path = Path(path)
     try:

@@ -16,6 +16,15 @@ from .validation import choice, real
 
 #: No cloth point moves faster than this (m/s) unless the solver blew up.
 SPEED_LIMIT = 1.0e4
+#: A step counts as stable up to this share of the estimated limit. The
+#: estimate is exact only for the linearised cloth at rest; far from rest,
+#: nonlinear coupling has destabilised steps above about 0.8 of it (and
+#: explicit Euler at 0.9995 of it diverged), so a step just under it is refused.
+STABLE_SHARE = 0.8
+#: Automatic steps and substeps aim at this share of the estimated limit.
+SAFE_SHARE = 0.5
+#: Automatic step of an integrator that is stable at any step: a 60 fps frame.
+FRAME_DT = 1.0 / 60.0
 
 
 class Simulation:
@@ -28,7 +37,10 @@ class Simulation:
     integrator : str, optional
         Overrides ``scene.solver.integrator``.
     dt : float, optional
-        Overrides ``scene.solver.dt`` (seconds per substep).
+        Overrides ``scene.solver.dt`` (seconds per substep). When neither
+        gives a step, the simulation takes the largest step that is at most
+        half the integrator's stable step and divides a 1/60 s frame evenly
+        (the frame itself for an integrator stable at any step).
     stability : {"refuse", "substep", "ignore"}, optional
         Overrides ``scene.solver.stability``: what to do with a step above
         the integrator's stable step.
@@ -40,12 +52,15 @@ class Simulation:
     Raises
     ------
     SceneError
-        If the step is above the stable step and the policy is ``"refuse"``.
+        If the step is above 0.8 of the stable step (:data:`STABLE_SHARE`)
+        and the policy is ``"refuse"``, or if no step is stable.
 
     Examples
     --------
     >>> import pvcloth
     >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
+    >>> sim.dt_source
+    'auto'
     >>> sim.advance(1 / 60)
     >>> sim.positions.shape, round(sim.time, 4)
     ((64, 3), 0.0167)
@@ -65,7 +80,8 @@ class Simulation:
         self.scene = scene
         self.model = build_model(scene, backend)
         self.integrator = get_integrator(integrator or scene.solver.integrator)
-        #: The step asked for (scene or override); ``dt`` may be a substep of it.
+        #: The step asked for (scene or override), or ``None`` for an automatic
+        #: one; ``dt`` is the step actually taken (a substep of it, perhaps).
         self.requested_dt = (
             scene.solver.dt if dt is None else real("dt", dt, minimum=0.0, exclusive=True)
         )
@@ -74,22 +90,50 @@ class Simulation:
         policy = choice("stability", policy, STABILITY_POLICIES)
         self.dt = self._checked_step(self.requested_dt, policy)
 
-    def _checked_step(self, dt: float, policy: str) -> float:
-        """Apply the scene's stability policy to the requested step."""
+    @property
+    def dt_source(self) -> str:
+        """Where ``dt`` comes from: ``"auto"`` (at most half the stable step),
+        ``"given"`` (the scene or an override) or ``"substep"`` (the given
+        step split into equal substeps for stability)."""
+        if self.requested_dt is None:
+            return "auto"
+        return "given" if self.dt == self.requested_dt else "substep"
+
+    def _checked_step(self, dt: float | None, policy: str) -> float:
+        """The step to take: automatic when ``dt`` is None, else ``dt`` checked
+        against the stable step as ``policy`` says."""
+        if dt is None:
+            # Whole steps per 60 fps frame, so that advancing by frames (1/60,
+            # 1/30, 1/20 s...) lands exactly on them.
+            limit = self._positive_stable_dt()
+            return FRAME_DT / max(1, math.ceil(FRAME_DT / (SAFE_SHARE * limit)))
         if policy == "ignore":
             return dt
-        limit = self.stable_dt()
-        if dt <= limit:
+        limit = self._positive_stable_dt()
+        if dt <= STABLE_SHARE * limit:
             return dt
         if policy == "substep":
-            return dt / math.ceil(dt / (0.5 * limit))
+            return dt / math.ceil(dt / (SAFE_SHARE * limit))
         raise SceneError(
             "solver.dt",
-            f"{dt:.4g} s is above the largest stable step of {self.integrator.name} for this "
-            f"cloth, about {limit:.3g} s. Use dt <= {0.5 * limit:.3g}, the implicit_euler "
-            f"integrator (stable at any step), or solver.stability = 'substep' to split "
-            f"each step automatically ('ignore' runs it anyway).",
+            f"{dt:.4g} s is above the largest stable step allowed for {self.integrator.name} "
+            f"on this cloth, {STABLE_SHARE:g} of its estimated limit of {limit:.3g} s (the "
+            f"estimate is exact only near rest). Use dt <= {SAFE_SHARE * limit:.3g} (or leave "
+            f"solver.dt out to get that step automatically), the implicit_euler integrator "
+            f"(stable at any step), or solver.stability = 'substep' to split each step "
+            f"automatically ('ignore' runs it anyway).",
         )
+
+    def _positive_stable_dt(self) -> float:
+        limit = self.stable_dt()
+        if not limit > 0.0:
+            raise SceneError(
+                "solver.integrator",
+                f"{self.integrator.name} is unstable at every step on this cloth (its stiffest "
+                f"mode is undamped and grows at any dt). Give the springs some damping, or use "
+                f"symplectic_euler, verlet, rk4 or implicit_euler.",
+            )
+        return limit
 
     @classmethod
     def from_file(cls, path: str | Path, **overrides) -> Simulation:
@@ -103,6 +147,95 @@ class Simulation:
         self.control = Control.from_model(self.model)
         self.steps = 0
         self._owed = 0.0  # simulated time asked for but not yet stepped
+        self.update_mesh()
+
+    # -- the cloth as a PyVista mesh -------------------------------------------
+
+    _mesh = None  # built on first use of ``mesh``: physics runs without PyVista
+
+    @property
+    def mesh(self):
+        """The cloth as a ``pyvista.StructuredGrid`` of dimensions ``(nx, ny, 1)``.
+
+        The same object for the life of the simulation, its points and point
+        data updated in place after every :meth:`advance`, :meth:`step` and
+        :meth:`reset`, so a plotter showing it or a script holding it sees the
+        current cloth. Point ``k`` is solver point ``k``. Point data (colour
+        by any of them, e.g. ``sim.plot(scalars="speed")``):
+
+        - ``velocity`` (N, 3), m/s
+        - ``speed`` (N,), m/s
+        - ``stretch`` (N,), local length over rest length (1 at rest)
+        - ``pinned`` (N,), 1 where the point is pinned, else 0
+
+        Examples
+        --------
+        >>> import pvcloth
+        >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
+        >>> mesh = sim.mesh
+        >>> mesh.dimensions, mesh.n_points
+        ((8, 8, 1), 64)
+        >>> sim.advance(0.1)
+        >>> sim.mesh is mesh, bool(mesh.points[:, 2].min() < sim.model.rest_positions[:, 2].min())
+        (True, True)
+        >>> sorted(mesh.point_data.keys())
+        ['pinned', 'speed', 'stretch', 'velocity']
+        """
+        if self._mesh is None:
+            from .view import cloth_mesh  # the view layer, imported only when asked for
+
+            self._mesh = cloth_mesh(self)
+        return self._mesh
+
+    def update_mesh(self) -> None:
+        """Copy the current state into :attr:`mesh` (done after every advance;
+        call it after editing ``sim.state`` by hand). Costs nothing until the
+        mesh is first used."""
+        if self._mesh is not None:
+            from .view import update_cloth_mesh
+
+            update_cloth_mesh(self._mesh, self)
+
+    def plot(self, **kwargs):
+        """Show the cloth as ``mesh.plot()`` does (keywords go to
+        :func:`pyvista.plot`); the cloth's colour unless ``scalars`` is given.
+
+        Examples
+        --------
+        >>> import pvcloth
+        >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
+        >>> sim.advance(0.2)
+        >>> sim.plot(scalars="stretch", off_screen=True, screenshot="stretch.png")
+        """
+        from .view import plot_cloth
+
+        return plot_cloth(self, **kwargs)
+
+    # -- how it reads in a terminal and a notebook -------------------------------
+
+    def summary(self) -> list[tuple[str, str]]:
+        """``(topic, text)`` rows: scene, size, clock, integrator and step, pins."""
+        nx, ny = self.shape
+        origin = {"auto": "automatic", "given": "as given", "substep": "substep"}[self.dt_source]
+        return [
+            ("scene", self.scene.name),
+            ("cloth", f"{nx} x {ny} points, backend {self.model.backend}"),
+            ("time", f"{self.time:.6g} s after {self.steps} steps"),
+            ("integrator", f"{self.integrator.name}, dt {self.dt:.4g} s ({origin})"),
+            ("pins", f"{self.control.pinned_index.size} point(s)"),
+        ]
+
+    def __repr__(self) -> str:
+        nx, ny = self.shape
+        return (
+            f"<Simulation {self.scene.name!r}: {nx} x {ny} points, t = {self.time:.6g} s "
+            f"({self.steps} steps), {self.integrator.name} at dt = {self.dt:.4g} s>"
+        )
+
+    def _repr_html_(self) -> str:
+        from .scene import _html_table
+
+        return _html_table(f"Simulation {self.scene.name!r}", self.summary())
 
     # -- what viewers read -----------------------------------------------------
 
@@ -196,7 +329,7 @@ class Simulation:
                 group.stiffness *= factor
                 group.damping *= factor
         self.model.refresh()
-        if self.dt > self.stable_dt():
+        if self.dt > STABLE_SHARE * self.stable_dt():
             self.dt = self._checked_step(self.dt, "substep")
 
     def set_wind(self, wind) -> None:
@@ -219,7 +352,7 @@ class Simulation:
 
     def set_integrator(self, name: str) -> None:
         """Switch integrator mid-run; the step asked for is kept if stable,
-        else split into substeps."""
+        else split into substeps (an automatic step is chosen anew)."""
         self.integrator = get_integrator(name)
         self.dt = self._checked_step(self.requested_dt, "substep")
 
@@ -247,14 +380,20 @@ class Simulation:
         pinned = self.control.pinned_index
         start = self.state.x[pinned].copy()
         goal = self.control.targets[pinned].copy()
-        for s in range(1, n + 1):
-            self._substep(pinned, start + (goal - start) * (s / n))
+        try:
+            for s in range(1, n + 1):
+                self._substep(pinned, start + (goal - start) * (s / n))
+        finally:  # after a divergence too: the mesh shows the last good state
+            self.update_mesh()
 
     def step(self) -> None:
         """One substep of ``dt``."""
         self._owed = 0.0
         pinned = self.control.pinned_index
-        self._substep(pinned, self.control.targets[pinned])
+        try:
+            self._substep(pinned, self.control.targets[pinned])
+        finally:
+            self.update_mesh()
 
     def _substep(self, pinned: np.ndarray, pin_positions: np.ndarray) -> None:
         dt = self.dt

@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import DivergenceError, PvclothError, SceneError
+from .errors import DivergenceError, SceneError, SweepError
 from .scene import Scene
 
 FIELDS = [
@@ -56,10 +56,6 @@ FIELDS = [
 ]
 
 _RANGE = re.compile(r"^([^:]+):([^:]+):(\d+)(lin|log)$")
-
-
-class SweepError(PvclothError):
-    """A sweep that cannot run as asked (bad ``--set``, missing Dask...)."""
 
 
 # -- settings -------------------------------------------------------------------
@@ -202,10 +198,19 @@ def reference_step(scenes: list[Scene], duration: float) -> float:
     step, and dividing ``duration`` exactly."""
     from .simulation import Simulation
 
-    smallest = min(s.solver.dt for s in scenes)
+    smallest = min(_step(s) for s in scenes)
     limit = Simulation(scenes[0], integrator="rk4", stability="ignore").stable_dt()
     dt = min(smallest / 4, 0.5 * limit)
     return duration / math.ceil(duration / dt)
+
+
+def _step(scene: Scene) -> float:
+    """The scene's step, or the automatic one it gets when it gives none."""
+    from .simulation import Simulation
+
+    if scene.solver.dt is not None:
+        return scene.solver.dt
+    return Simulation(scene, stability="ignore").dt
 
 
 def run_reference(scene: Scene, dt: float, duration: float) -> dict:
@@ -223,7 +228,7 @@ def run_unit(unit: Unit, reference: dict, duration: float) -> dict:
 
     scene = unit.scene
     # Whole steps that end exactly at `duration`, as in the trade-off command.
-    dt = duration / max(1, round(duration / scene.solver.dt))
+    dt = duration / max(1, round(duration / _step(scene)))
     sim = Simulation(scene, dt=dt, stability="ignore")
     start = time.perf_counter()
     error_text = ""
@@ -355,7 +360,7 @@ def run_sweep(
     list of dict
         All rows of the sweep, old and new, in unit order.
     """
-    from tqdm import tqdm
+    from tqdm.auto import tqdm
 
     units = expand(scene, sets)
     out.mkdir(parents=True, exist_ok=True)

@@ -70,7 +70,7 @@ def measure(scene, *, integrators=None, steps=None, duration=0.25, progress=True
     -------
     list of Run
     """
-    from tqdm import tqdm
+    from tqdm.auto import tqdm
 
     integrators = sorted(INTEGRATORS) if integrators is None else list(integrators)
     steps = default_steps(scene) if steps is None else sorted(steps)

@@ -77,6 +77,44 @@ def cloth_grid(positions: np.ndarray, shape: tuple[int, int]) -> pv.StructuredGr
     return grid
 
 
+def cloth_mesh(sim) -> pv.StructuredGrid:
+    """A new grid of the simulation's cloth with its point data (what
+    ``Simulation.mesh`` holds; see there for the fields)."""
+    grid = cloth_grid(sim.positions, sim.shape)
+    update_cloth_mesh(grid, sim)
+    return grid
+
+
+def update_cloth_mesh(grid: pv.StructuredGrid, sim) -> None:
+    """Refresh ``grid``'s points and point data from ``sim`` in place.
+
+    Point arrays are assigned, not copied into, so VTK sees the change. No
+    array is made the active scalars: a plotter that draws the grid in one
+    colour keeps doing so.
+    """
+    from .grid import point_stretch
+
+    grid.points = sim.positions
+    velocity = np.array(sim.velocities)
+    fields = {
+        "velocity": velocity,
+        "speed": np.linalg.norm(velocity, axis=1),
+        "stretch": point_stretch(sim.positions, sim.model.rest_positions, sim.model.shape),
+        "pinned": sim.control.pinned.astype(np.uint8),
+    }
+    for name, values in fields.items():
+        grid.point_data.set_array(values, name)
+
+
+def plot_cloth(sim, **kwargs):
+    """``sim.mesh.plot(**kwargs)`` in the cloth's colour and smooth shading,
+    unless ``scalars`` or ``color`` say otherwise."""
+    if kwargs.get("scalars") is None:
+        kwargs.setdefault("color", CLOTH_COLOR)
+    kwargs.setdefault("smooth_shading", True)
+    return sim.mesh.plot(**kwargs)
+
+
 def motion_bounds(sim) -> tuple[float, ...]:
     """Box the cloth can reach while it swings from its pins: where it starts,
     that box mirrored through the pins (the far side of the swing), and both
@@ -131,7 +169,7 @@ class ClothView:
     def __init__(self, sim, plotter: pv.Plotter, *, show_pins: bool = True):
         self.sim = sim
         self.plotter = plotter
-        self.grid = cloth_grid(sim.positions, sim.shape)
+        self.grid = sim.mesh  # the simulation's own grid, point data and all
         plotter.set_background(BACK_COLOR, top="white")
         self.actor = plotter.add_mesh(
             self.grid,
@@ -174,8 +212,8 @@ class ClothView:
         self.plotter.reset_camera(bounds=motion_bounds(self.sim))
 
     def update(self) -> None:
-        """Copy the simulation's current positions into the drawn meshes."""
-        self.grid.points = self.sim.positions
+        """Copy the simulation's current state into the drawn meshes."""
+        self.sim.update_mesh()
         for obstacle, actor in zip(self.sim.model.obstacles, self.obstacle_actors, strict=True):
             if obstacle.path.size:
                 actor.user_matrix = obstacle_matrix(obstacle, self.sim.time)

@@ -6,7 +6,6 @@ import subprocess
 import sys
 
 from conftest import SCENES
-
 from pvcloth.cli import main
 
 

@@ -1,4 +1,5 @@
-"""Every example script runs off-screen and writes its picture."""
+"""Every example script runs off-screen and writes its picture, from a folder
+that is not the repository's (a user's working directory is anywhere)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import sys
 
 import imageio.v3 as iio
 import pytest
+
 from conftest import ROOT
 
 EXAMPLES = sorted((ROOT / "examples").glob("*.py"))
@@ -19,7 +21,7 @@ def test_example_writes_its_picture(script, tmp_path):
     output = tmp_path / f"{script.stem}{suffix}"
     subprocess.run(
         [sys.executable, str(script), str(output)],
-        cwd=ROOT,
+        cwd=tmp_path,
         check=True,
         capture_output=True,
         timeout=300,

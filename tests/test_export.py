@@ -5,13 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import SCENES, small_scene
 
 import pvcloth
+from conftest import SCENES, small_scene
 from pvcloth import Simulation
 from pvcloth.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
 from pvcloth.cli import main
-from pvcloth.export import ExportInterrupted, export
+from pvcloth.timeseries import ExportInterrupted, export
 
 
 def cloth():

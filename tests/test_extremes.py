@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import small_scene
 
 import pvcloth
+from conftest import small_scene
 from pvcloth import DivergenceError, PvclothError, SceneError, Simulation
 
 

@@ -8,9 +8,9 @@ import math
 
 import numpy as np
 import pytest
-from conftest import small_scene
 from test_physics import two_body
 
+from conftest import small_scene
 from pvcloth import INTEGRATORS, Control, PinSpec, Simulation, State, get_integrator
 from pvcloth.integrators.base import largest_stable_step
 

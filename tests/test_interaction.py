@@ -10,8 +10,8 @@ import sys
 
 import numpy as np
 import pytest
-from conftest import SCENES
 
+from conftest import SCENES
 from pvcloth import Simulation
 
 pytestmark = [

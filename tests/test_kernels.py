@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import SCENES, small_scene
 
 import pvcloth
+from conftest import SCENES, small_scene
 from pvcloth import INTEGRATORS, ObstacleSpec, SceneError, Simulation, WindSpec
 from pvcloth.kernels import available, resolve_backend
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import free_cloth, small_scene
 
 import pvcloth
+from conftest import free_cloth, small_scene
 from pvcloth import PinSpec, SpringsSpec, build_model
 from pvcloth.forces import Springs
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import SCENES, small_scene
 from scipy.spatial.transform import Rotation
 
+from conftest import SCENES, small_scene
 from pvcloth import (
     ClothSpec,
     ObstacleSpec,

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import free_cloth, small_scene
 from scipy.optimize import minimize
 
 import pvcloth
+from conftest import free_cloth, small_scene
 from pvcloth import Control, DivergenceError, PinSpec, Simulation, State, get_integrator
 from pvcloth.forces import Springs
 from pvcloth.model import Model

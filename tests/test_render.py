@@ -6,9 +6,9 @@ from __future__ import annotations
 import imageio.v3 as iio
 import numpy as np
 import pytest
-from conftest import SCENES, small_scene
 
 import pvcloth
+from conftest import SCENES, small_scene
 from pvcloth import Simulation
 
 pytestmark = pytest.mark.usefixtures("rendering")

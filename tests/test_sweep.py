@@ -10,8 +10,8 @@ import time
 
 import numpy as np
 import pytest
-from conftest import small_scene
 
+from conftest import small_scene
 from pvcloth import SceneError
 from pvcloth.sweep import (
     SweepError,

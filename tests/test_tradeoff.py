@@ -8,8 +8,8 @@ import csv
 import imageio.v3 as iio
 import numpy as np
 import pytest
-from conftest import SCENES, small_scene
 
+from conftest import SCENES, small_scene
 from pvcloth import INTEGRATORS, Simulation
 from pvcloth.cli import main
 from pvcloth.tradeoff import measure, pareto_front

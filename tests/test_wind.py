@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import SCENES, small_scene
 
+from conftest import SCENES, small_scene
 from pvcloth import (
     ClothSpec,
     DivergenceError,

@@ -30,17 +30,9 @@ from xml.sax.saxutils import quoteattr
 import meshio
 import numpy as np
 
-from .errors import PvclothError, SceneError
+from .errors import ExportInterrupted, SceneError
 
 FORMATS = (".pvd", ".xdmf", ".obj")
-
-
-class ExportInterrupted(PvclothError):
-    """An export stopped early; ``frames`` were written and stay readable."""
-
-    def __init__(self, message: str, frames: int):
-        super().__init__(message)
-        self.frames = frames
 
 
 def quads(shape: tuple[int, int]) -> np.ndarray:
@@ -108,11 +100,15 @@ def export(sim, output, *, frames: int = 60, fps: float = 30.0, progress: bool =
     Examples
     --------
     >>> import pvcloth
-    >>> from pvcloth.export import export
-    >>> sim = pvcloth.Simulation(pvcloth.Scene())
-    >>> export(sim, "cloth.pvd", frames=10, progress=False)  # doctest: +SKIP
+    >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
+    >>> pvcloth.export(sim, "cloth.pvd", frames=10, progress=False)
+    PosixPath('cloth.pvd')
+    >>> import pyvista as pv
+    >>> reader = pv.get_reader("cloth.pvd")
+    >>> len(reader.time_values), round(reader.time_values[-1], 3)
+    (10, 0.3)
     """
-    from tqdm import tqdm
+    from tqdm.auto import tqdm
 
     path = Path(output)
     suffix = path.suffix.lower()

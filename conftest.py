@@ -16,7 +16,7 @@ import pytest
 import pvcloth
 from pvcloth import ClothSpec, PinSpec, Scene, SolverSpec, SpringSpec, SpringsSpec
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parent
 SCENES = ROOT / "data" / "scenes"
 
 
@@ -91,3 +91,16 @@ def rendering():
         if os.environ.get("CI"):
             pytest.fail(message)
         pytest.skip(message)
+
+
+@pytest.fixture(autouse=True)
+def _docstring_examples_in_a_fresh_folder(request, monkeypatch):
+    """Docstring examples (collected by ``--doctest-modules``) write their
+    files into a temporary folder and draw off-screen."""
+    from _pytest.doctest import DoctestItem
+
+    if isinstance(request.node, DoctestItem):
+        monkeypatch.chdir(request.getfixturevalue("tmp_path"))
+        import pyvista
+
+        monkeypatch.setattr(pyvista, "OFF_SCREEN", True)

@@ -1,0 +1,162 @@
+"""``pvcloth run`` as a person starts it: the console command opens a real
+window on a virtual X screen, takes key presses and a mouse drag through the
+X server (xdotool, so VTK gets real key, character and button events: pause,
+a screenshot key, a drag that Shift+release leaves pinned), and quits on
+``q`` with exit code 0 and nothing on stderr. Without a display it exits
+non-zero and says how to get one."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+from conftest import ROOT
+
+PVCLOTH = str(Path(sys.executable).with_name("pvcloth"))  # the console command
+#: As the README writes it.
+COMMAND = ["run", "data/scenes/hanging.toml"]
+
+
+def _needs(*programs: str) -> None:
+    missing = [p for p in programs if shutil.which(p) is None]
+    if missing:
+        message = f"{', '.join(missing)} not installed (apt-get install xvfb xauth xdotool)"
+        if os.environ.get("CI"):
+            pytest.fail(message + "; .ci/run installs them")
+        pytest.skip(message)
+
+
+@pytest.fixture
+def workdir(tmp_path):
+    """A user's folder holding the repository's data, as after a clone."""
+    (tmp_path / "data").symlink_to(ROOT / "data")
+    return tmp_path
+
+
+@pytest.mark.parametrize("display", [None, ":97"], ids=["unset", "no-server"])
+def test_without_a_display_it_says_how_to_get_one(workdir, display):
+    env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
+    if display:
+        assert not Path(f"/tmp/.X{display[1:]}-lock").exists()  # really no server there
+        env["DISPLAY"] = display
+    result = subprocess.run(
+        [PVCLOTH, *COMMAND], cwd=workdir, env=env, capture_output=True, text=True, timeout=120
+    )
+    assert result.returncode == 2
+    assert "xvfb-run -a pvcloth run" in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+@pytest.fixture
+def x_display():
+    """A virtual X screen of our own; yields its DISPLAY value."""
+    _needs("Xvfb", "xdotool")
+    read, write = os.pipe()
+    server = subprocess.Popen(
+        ["Xvfb", "-displayfd", str(write), "-screen", "0", "1280x1024x24", "-nolisten", "tcp"],
+        pass_fds=(write,),
+        stderr=subprocess.DEVNULL,
+    )
+    os.close(write)
+    with os.fdopen(read) as pipe:
+        number = pipe.readline().strip()
+    yield f":{number}"
+    server.terminate()
+    server.wait(10)
+
+
+def _xdotool(display: str, *args: str) -> str:
+    result = subprocess.run(
+        ["xdotool", *args],
+        env=dict(os.environ, DISPLAY=display),
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    return result.stdout.strip()
+
+
+def _wait_for(condition, timeout: float, what: str):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = condition()
+        if value:
+            return value
+        time.sleep(0.2)
+    raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+
+
+def _cloth_pixels(path: Path) -> np.ndarray:
+    """Mask of the cloth's brick-red pixels (lit or in shade) in a screenshot."""
+    image = iio.imread(path)[..., :3].astype(int)
+    r, g, b = image[..., 0], image[..., 1], image[..., 2]
+    return (r > g + 30) & (r > b + 30)
+
+
+def test_the_window_opens_takes_keys_and_a_drag_and_quits(workdir, x_display):
+    env = {k: v for k, v in os.environ.items() if k != "VTK_DEFAULT_OPENGL_WINDOW"}
+    env["DISPLAY"] = x_display
+    app = subprocess.Popen(
+        [PVCLOTH, *COMMAND],
+        cwd=workdir,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        window = _wait_for(
+            lambda: _xdotool(x_display, "search", "--name", "^pvcloth").split("\n")[0],
+            90,
+            "the window",
+        )
+
+        def key(name: str) -> None:
+            _xdotool(x_display, "windowfocus", "--sync", window, "key", name)
+
+        def screenshot(n: int) -> Path:
+            key("k")  # the window's own screenshot key: pvcloth_NNN.png in its folder
+            shot = workdir / f"pvcloth_{n:03d}.png"
+            _wait_for(lambda: shot.exists() and shot.stat().st_size > 0, 30, shot.name)
+            time.sleep(0.3)  # let the write finish
+            return shot
+
+        time.sleep(3)  # let the cloth fall
+        key("space")  # pause, so the cloth stays where the screenshot shows it
+        time.sleep(0.5)
+        before = _cloth_pixels(screenshot(1))
+        assert before.mean() > 0.02  # the cloth is on screen
+        rows, cols = np.nonzero(before)
+        # Grab the cloth just above its lowest pixel, drag it 250 px right, to
+        # where no cloth is, and drop it there with Shift held (it stays
+        # pinned); after the physics resumes the cloth must reach the cursor.
+        y = rows.max() - 3
+        x = int(np.median(cols[rows == rows.max()]))
+        target = (slice(y - 8, y + 9), slice(x + 250 - 8, x + 250 + 9))
+        assert not before[target].any()
+        _xdotool(x_display, "mousemove", "--window", window, str(x), str(y))
+        _xdotool(x_display, "mousedown", "1")
+        for step in range(1, 11):
+            _xdotool(x_display, "mousemove", "--window", window, str(x + 25 * step), str(y))
+            time.sleep(0.05)
+        _xdotool(x_display, "keydown", "shift", "mouseup", "1", "keyup", "shift")
+        key("space")  # resume
+        time.sleep(2.0)
+        after = _cloth_pixels(screenshot(2))
+        assert after[target].any(), "the cloth did not follow the mouse and stay pinned there"
+        key("q")
+        out, err = app.communicate(timeout=60)
+    finally:
+        if app.poll() is None:
+            app.kill()
+            app.communicate()
+    assert app.returncode == 0, err
+    assert err == ""
