@@ -37,13 +37,18 @@ def cmd_info(args) -> None:
 def cmd_simulate(args) -> None:
     from tqdm import tqdm
 
+    from .validation import real
+
+    seconds = real("--seconds", args.seconds, minimum=0.0, exclusive=True)
+    fps = real("--fps", args.fps, minimum=0.0, exclusive=True, maximum=1000.0)
     sim = _simulation(args)
-    frames = max(1, round(args.seconds * args.fps))
+    sim.check_run_length(seconds)
+    frames = max(1, round(seconds * fps))
     start = time.perf_counter()
     for _ in tqdm(
         range(frames), desc=f"simulating {sim.scene.name}", unit="frame", disable=args.quiet
     ):
-        sim.advance(args.seconds / frames)
+        sim.advance(seconds / frames)
     wall = time.perf_counter() - start
     energy = sim.energy()
     z = sim.positions[:, 2]

@@ -159,6 +159,7 @@ def render(
         raise SceneError("frames", f"must be a whole number of at least 1, got {frames!r}")
     if not (isinstance(fps, (int, float)) and 0 < fps <= 1000):
         raise SceneError("fps", f"must be a number in (0, 1000], got {fps!r}")
+    sim.check_run_length((frames - 1) / fps)  # refused before any work, not after hours
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(f".{path.stem}.partial{path.suffix}")
     stats = RenderStats(path, 0)

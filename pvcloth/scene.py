@@ -26,6 +26,7 @@ not per spring, so refining the grid approximates the same cloth.
 from __future__ import annotations
 
 import dataclasses
+import math
 import tomllib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -37,6 +38,24 @@ from .validation import check_keys, choice, integer, real, sequence, vector
 
 #: Largest number of points along one side of the cloth.
 MAX_RESOLUTION = 4096
+#: Sizes in metres pvcloth accepts (a tenth of a millimetre to ten kilometres),
+#: and the largest distance of any position from the origin. Beyond them a
+#: step's arithmetic under- or overflows (a 1e-320 m cloth divides by zero,
+#: a 1e308 m sphere overflows) instead of describing a cloth.
+MIN_LENGTH, MAX_LENGTH = 1e-4, 1e4
+#: Largest speed (m/s) of the wind, and acceleration (m/s^2) of gravity, per
+#: component: the drag model is for air well below the speed of sound.
+MAX_WIND, MAX_GRAVITY = 340.0, 1e4
+#: Largest stiffness (N/m), damping (N s/m), mass (kg) and air damping (1/s).
+MAX_STIFFNESS, MAX_DAMPING, MAX_MASS, MAX_AIR_DAMPING = 1e12, 1e9, 1e6, 1e6
+#: Smallest cloth mass (kg): below it the stable step of any stiffness is
+#: too small to simulate a frame.
+MIN_MASS = 1e-9
+#: Most a surface's thickness (the gap the cloth keeps) may be, in metres.
+MAX_THICKNESS = 1.0
+
+_LENGTH = {"minimum": MIN_LENGTH, "maximum": MAX_LENGTH}
+_POSITION = {"minimum": -MAX_LENGTH, "maximum": MAX_LENGTH}
 ORIENTATIONS = ("vertical", "horizontal")
 CORNERS = ("top-left", "top-right", "bottom-left", "bottom-right")
 EDGES = ("top", "bottom", "left", "right")
@@ -53,16 +72,17 @@ class ClothSpec:
     Parameters
     ----------
     size : (float, float)
-        Width and height in metres (along the point index i and j).
+        Width and height in metres (along the point index i and j), each
+        1e-4 to 1e4 m (:data:`MIN_LENGTH`, :data:`MAX_LENGTH`).
     resolution : (int, int)
         Points along the width (``nx``) and the height (``ny``), each 2 to 4096.
     mass : float
-        Total mass in kilograms, greater than zero.
+        Total mass in kilograms, 1e-9 to 1e6.
     orientation : {"vertical", "horizontal"}
         ``"vertical"`` hangs the cloth in the x-z plane (j runs up along z);
         ``"horizontal"`` lays it flat in the x-y plane (j runs along y).
     center : (float, float, float)
-        Position of the cloth's centre in metres.
+        Position of the cloth's centre in metres (each within +-1e4).
 
     Examples
     --------
@@ -78,7 +98,7 @@ class ClothSpec:
     center: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
     def __post_init__(self):
-        _set(self, "size", vector("size", self.size, 2, minimum=0.0, exclusive=True))
+        _set(self, "size", vector("size", self.size, 2, **_LENGTH))
         res = sequence("resolution", self.resolution, 2)
         _set(
             self,
@@ -88,9 +108,9 @@ class ClothSpec:
                 for n, r in enumerate(res)
             ),
         )
-        _set(self, "mass", real("mass", self.mass, minimum=0.0, exclusive=True))
+        _set(self, "mass", real("mass", self.mass, minimum=MIN_MASS, maximum=MAX_MASS))
         _set(self, "orientation", choice("orientation", self.orientation, ORIENTATIONS))
-        _set(self, "center", vector("center", self.center, 3))
+        _set(self, "center", vector("center", self.center, 3, **_POSITION))
 
 
 @dataclass(frozen=True)
@@ -105,8 +125,10 @@ class SpringSpec:
     damping: float = 0.0
 
     def __post_init__(self):
-        _set(self, "stiffness", real("stiffness", self.stiffness, minimum=0.0))
-        _set(self, "damping", real("damping", self.damping, minimum=0.0))
+        _set(
+            self, "stiffness", real("stiffness", self.stiffness, minimum=0.0, maximum=MAX_STIFFNESS)
+        )
+        _set(self, "damping", real("damping", self.damping, minimum=0.0, maximum=MAX_DAMPING))
 
 
 @dataclass(frozen=True)
@@ -265,7 +287,11 @@ class WindSpec:
     seed: int = 0
 
     def __post_init__(self):
-        _set(self, "velocity", vector("velocity", self.velocity, 3))
+        _set(
+            self,
+            "velocity",
+            vector("velocity", self.velocity, 3, minimum=-MAX_WIND, maximum=MAX_WIND),
+        )
         _set(self, "drag", real("drag", self.drag, minimum=0.0))
         _set(self, "lift", real("lift", self.lift, minimum=0.0))
         _set(self, "density", real("density", self.density, minimum=0.0, exclusive=True))
@@ -335,23 +361,29 @@ class ObstacleSpec:
             for key in keys:
                 if other != kind and getattr(self, key) is not None:
                     raise SceneError(key, f"is not used by a {kind}; it belongs to a {other}")
-        _set(self, "center", vector("center", self.center, 3))
+        _set(self, "center", vector("center", self.center, 3, **_POSITION))
         if kind == "sphere":
             if self.radius is None:
                 raise SceneError("radius", "a sphere needs a radius (metres, > 0)")
-            _set(self, "radius", real("radius", self.radius, minimum=0.0, exclusive=True))
+            _set(self, "radius", real("radius", self.radius, **_LENGTH))
         elif kind == "box":
             if self.size is None:
                 raise SceneError("size", "a box needs size = [x, y, z] (metres, each > 0)")
-            _set(self, "size", vector("size", self.size, 3, minimum=0.0, exclusive=True))
+            _set(self, "size", vector("size", self.size, 3, **_LENGTH))
             rotation = (0.0, 0.0, 0.0) if self.rotation is None else self.rotation
             _set(self, "rotation", vector("rotation", rotation, 3))
         else:
             normal = vector("normal", (0.0, 0.0, 1.0) if self.normal is None else self.normal, 3)
-            if not any(normal):
-                raise SceneError("normal", "must not be zero; give the direction of the free side")
+            length = math.hypot(*normal)
+            if not length >= 1e-9:  # a subnormal normal would normalise to inf and NaN
+                raise SceneError(
+                    "normal",
+                    f"must not be (nearly) zero, got {normal}; give the direction of the free side",
+                )
             _set(self, "normal", normal)
-        _set(self, "thickness", real("thickness", self.thickness, minimum=0.0))
+        _set(
+            self, "thickness", real("thickness", self.thickness, minimum=0.0, maximum=MAX_THICKNESS)
+        )
         _set(self, "friction", real("friction", self.friction, minimum=0.0))
         static = self.friction if self.static_friction is None else self.static_friction
         static = real("static_friction", static, minimum=0.0)
@@ -364,7 +396,7 @@ class ObstacleSpec:
         _set(self, "static_friction", static)
         frames = []
         for n, frame in enumerate(sequence("path", self.path)):
-            frames.append(vector(f"path[{n}]", frame, 4))
+            frames.append(vector(f"path[{n}]", frame, 4, **_POSITION))
             if n and frames[-1][0] <= frames[-2][0]:
                 raise SceneError(
                     f"path[{n}]",
@@ -430,8 +462,16 @@ class Scene:
                     f.name,
                     f"expected a {expected.__name__}, got {type(getattr(self, f.name)).__name__}",
                 )
-        _set(self, "gravity", vector("gravity", self.gravity, 3))
-        _set(self, "air_damping", real("air_damping", self.air_damping, minimum=0.0))
+        _set(
+            self,
+            "gravity",
+            vector("gravity", self.gravity, 3, minimum=-MAX_GRAVITY, maximum=MAX_GRAVITY),
+        )
+        _set(
+            self,
+            "air_damping",
+            real("air_damping", self.air_damping, minimum=0.0, maximum=MAX_AIR_DAMPING),
+        )
         if self.wind is not None and not isinstance(self.wind, WindSpec):
             raise SceneError("wind", f"expected a WindSpec or None, got {type(self.wind).__name__}")
         obstacles = sequence("obstacles", self.obstacles)
@@ -665,14 +705,24 @@ def load_scene(path: str | Path) -> Scene:
     The bundled scenes are in the repository's ``data/scenes`` folder, e.g.
     ``pvcloth.load_scene("data/scenes/hanging.toml")``.
     """
-    path = Path(path)
     try:
+        path = Path(path)
         text = path.read_text(encoding="utf-8")
+    except TypeError:
+        raise SceneError("", f"expected a file path, got {path!r}") from None
+    except UnicodeDecodeError as error:
+        raise SceneError(
+            "", f"{path} is not a text file in UTF-8 (byte {error.start}): a scene is TOML text"
+        ) from None
+    except ValueError as error:  # e.g. a NUL character in the path
+        raise SceneError("", f"cannot read scene file {str(path)!r}: {error}") from None
     except OSError as error:
         raise SceneError("", f"cannot read scene file {str(path)!r}: {error.strerror}") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise SceneError("", f"{path}: not valid TOML: {error}") from None
+    except RecursionError:
+        raise SceneError("", f"{path}: its tables or lists are nested too deeply") from None
     data.setdefault("name", path.stem)
     return Scene.from_dict(data)

@@ -12,7 +12,7 @@ from .integrators import get_integrator
 from .model import build_model
 from .scene import STABILITY_POLICIES, Scene, load_scene
 from .state import Control, State
-from .validation import choice, real
+from .validation import choice, integer, real
 
 #: No cloth point moves faster than this (m/s) unless the solver blew up.
 SPEED_LIMIT = 1.0e4
@@ -25,6 +25,12 @@ STABLE_SHARE = 0.8
 SAFE_SHARE = 0.5
 #: Automatic step of an integrator that is stable at any step: a 60 fps frame.
 FRAME_DT = 1.0 / 60.0
+#: Most steps one call may take: hours of wall time even for a tiny cloth.
+MAX_STEPS = 10**7
+#: Peak bytes per cloth point while a simulation is built: the stable-step
+#: estimate's sparse Jacobians dominate (8.3 kB measured at 128x128 and
+#: 256x256 by `python benchmarks/memory.py`; stepping needs a tenth of it).
+PEAK_BYTES_PER_POINT = 8500
 
 
 class Simulation:
@@ -78,6 +84,7 @@ class Simulation:
         if not isinstance(scene, Scene):
             raise SceneError("scene", f"expected a pvcloth.Scene, got {type(scene).__name__}")
         self.scene = scene
+        _check_memory(scene)
         self.model = build_model(scene, backend)
         self.integrator = get_integrator(integrator or scene.solver.integrator)
         #: The step asked for (scene or override), or ``None`` for an automatic
@@ -279,20 +286,34 @@ class Simulation:
         """Flat index of a point given as an index or an ``(i, j)`` pair."""
         nx, ny = self.shape
         if isinstance(point, (tuple, list)) and len(point) == 2:
-            i, j = (int(p) for p in point)
-            if not (0 <= i < nx and 0 <= j < ny):
-                raise SceneError("point", f"({i}, {j}) is outside the {nx}x{ny} grid")
+            i = integer("point[0] (i)", point[0], minimum=0, maximum=nx - 1)
+            j = integer("point[1] (j)", point[1], minimum=0, maximum=ny - 1)
             return i + nx * j
-        if isinstance(point, (int, np.integer)) and 0 <= point < nx * ny:
-            return int(point)
+        if isinstance(point, (int, np.integer)) and not isinstance(point, bool):
+            return integer("point", point, minimum=0, maximum=nx * ny - 1)
         raise SceneError(
-            "point", f"expected an index 0..{nx * ny - 1} or an (i, j) pair, got {point!r}"
+            "point",
+            f"expected an index 0..{nx * ny - 1} or an (i, j) pair of whole numbers, got {point!r}",
         )
+
+    @staticmethod
+    def _target(position) -> np.ndarray:
+        """A pin target: three finite coordinates in metres."""
+        try:
+            target = np.asarray(position, dtype=float)
+        except (TypeError, ValueError):
+            target = None
+        if target is None or target.shape != (3,) or not np.isfinite(target).all():
+            raise SceneError(
+                "position",
+                f"expected three finite coordinates (x, y, z) in metres, got {position!r}",
+            )
+        return target
 
     def pin(self, point, position=None) -> None:
         """Hold a point at ``position`` (default: where it is now)."""
         k = self.point_index(point)
-        target = self.state.x[k] if position is None else np.asarray(position, dtype=float)
+        target = self.state.x[k] if position is None else self._target(position)
         self.control.targets[k] = target
         self.control.pinned[k] = True
         self.control.refresh(self.model)
@@ -302,7 +323,7 @@ class Simulation:
         k = self.point_index(point)
         if not self.control.pinned[k]:
             raise SceneError("point", f"point {k} is not pinned; pin it first")
-        self.control.targets[k] = np.asarray(position, dtype=float)
+        self.control.targets[k] = self._target(position)
 
     def unpin(self, point) -> None:
         """Let a pinned point move freely."""
@@ -370,8 +391,12 @@ class Simulation:
         DivergenceError
             If the state stops being finite or bounded; the state is left at
             the last good step.
+        SceneError
+            If ``seconds`` would take more than :data:`MAX_STEPS` steps (the
+            run is refused before it starts).
         """
         seconds = real("seconds", seconds, minimum=0.0)
+        self.check_run_length(self._owed + seconds)
         self._owed += seconds
         n = math.floor(self._owed / self.dt + 1e-9)
         self._owed = max(self._owed - n * self.dt, 0.0)
@@ -385,6 +410,21 @@ class Simulation:
                 self._substep(pinned, start + (goal - start) * (s / n))
         finally:  # after a divergence too: the mesh shows the last good state
             self.update_mesh()
+
+    def check_run_length(self, seconds: float) -> int:
+        """The number of steps ``seconds`` of simulation take; a
+        :class:`SceneError` if that is more than :data:`MAX_STEPS` (a step
+        far below what the run needs would otherwise look like a hang)."""
+        steps = seconds / self.dt
+        if not steps <= MAX_STEPS:
+            raise SceneError(
+                "solver.dt",
+                f"{seconds:.4g} s of simulation at dt = {self.dt:.3g} s is {steps:.3g} steps, "
+                f"more than the {MAX_STEPS:.0e} pvcloth runs in one go. Use a larger step "
+                f"(leave solver.dt out for one chosen from the stable step) or simulate less "
+                f"time per call.",
+            )
+        return math.floor(steps + 1e-9)
 
     def step(self) -> None:
         """One substep of ``dt``."""
@@ -432,10 +472,12 @@ class Simulation:
             f"simulation diverged at t = {self.state.t:.6g} s (step {self.steps + 1}) "
             f"with {self.integrator.name} at dt = {self.dt:.3g} s: point velocities {what}."
         )
-        try:
-            stable = self.stable_dt()
-        except Exception:  # the last good state may be too wild to linearise
-            stable = None
+        stable = None
+        if np.isfinite(self.state.x).all() and np.isfinite(self.state.v).all():
+            try:
+                stable = self.stable_dt()
+            except Exception:  # the last good state may be too wild to linearise
+                stable = None
         if stable and 0 < stable < math.inf:
             message += (
                 f" The largest stable step here is about {stable:.3g} s; "
@@ -444,3 +486,31 @@ class Simulation:
         else:
             message += " Try a smaller dt or the symplectic_euler integrator with damping."
         return message
+
+
+def available_memory() -> float | None:
+    """Bytes of memory available to a new allocation (Linux's MemAvailable),
+    or None where that cannot be read."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as info:
+            for line in info:
+                if line.startswith("MemAvailable:"):
+                    return 1024.0 * float(line.split()[1])
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def _check_memory(scene: Scene) -> None:
+    """Refuse, before any allocation, a cloth the machine cannot hold."""
+    nx, ny = scene.cloth.resolution
+    need = float(nx * ny * PEAK_BYTES_PER_POINT)
+    have = available_memory()
+    if have is not None and need > 0.9 * have:
+        raise SceneError(
+            "cloth.resolution",
+            f"{nx} x {ny} = {nx * ny:,} points need about {need / 1e9:.3g} GB while the "
+            f"simulation is built ({PEAK_BYTES_PER_POINT / 1e3:.1f} kB per point), and "
+            f"{have / 1e9:.3g} GB are available. Use fewer points: about "
+            f"{int((0.9 * have / PEAK_BYTES_PER_POINT) ** 0.5)} per side would fit.",
+        )

@@ -118,6 +118,7 @@ def export(sim, output, *, frames: int = 60, fps: float = 30.0, progress: bool =
         raise SceneError("frames", f"must be a whole number of at least 1, got {frames!r}")
     if not (isinstance(fps, (int, float)) and 0 < fps <= 1000):
         raise SceneError("fps", f"must be a number in (0, 1000], got {fps!r}")
+    sim.check_run_length(frames / fps)  # refused before any work, not after hours
     path.parent.mkdir(parents=True, exist_ok=True)
     cells = [("quad", quads(sim.shape))]
     rest = sim.model.rest_positions

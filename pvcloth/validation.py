@@ -51,7 +51,10 @@ def real(
     """A finite real number, optionally bounded below (and above)."""
     if isinstance(value, bool) or not isinstance(value, Real):
         raise SceneError(key, f"expected a number, got {describe(value)}")
-    number = float(value)
+    try:
+        number = float(value)
+    except OverflowError:  # an integer beyond any float, e.g. 10**400
+        raise SceneError(key, f"expected a finite number, got {describe(value)}") from None
     if not math.isfinite(number):
         raise SceneError(key, f"expected a finite number, got {value!r}")
     if minimum is not None:

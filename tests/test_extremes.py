@@ -122,3 +122,115 @@ def test_a_pin_dragged_very_fast(integrator):
         return
     np.testing.assert_array_equal(sim.positions[corner], goal)
     assert np.isfinite(sim.positions).all()
+
+
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+@pytest.mark.parametrize("integrator", sorted(pvcloth.INTEGRATORS))
+@pytest.mark.parametrize("where", ["x", "v"])
+@pytest.mark.parametrize("bad", [np.nan, np.inf])
+def test_a_non_finite_state_raises_in_every_backend_and_integrator(bad, where, integrator, backend):
+    """No backend calls NaN finite (the compiled update once folded its
+    finiteness test away under fast-math)."""
+    from pvcloth.kernels import available
+
+    if backend == "numba" and not available():
+        pytest.skip("numba not installed")
+    scene = small_scene(6, damping=0.1, integrator=integrator, dt=1e-3, stability="substep")
+    sim = Simulation(scene, backend=backend)
+    getattr(sim.state, where)[7, 0] = bad
+    with pytest.raises(DivergenceError):  # implicit Euler: "the linear solve failed"
+        sim.advance(0.01)
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda sim: sim.pin(0, [np.nan, 0.0, 0.0]),
+        lambda sim: sim.pin(0, [np.inf, 0.0, 0.0]),
+        lambda sim: sim.pin(0, [1.0, 2.0]),
+        lambda sim: sim.pin(0, "up"),
+        lambda sim: sim.move_pin(sim.pinned_indices[0], None),
+        lambda sim: sim.pin(("a", 0)),
+        lambda sim: sim.pin((1.9, 0)),
+        lambda sim: sim.pin(True),
+        lambda sim: sim.pin(36),
+        lambda sim: sim.pin((6, 0)),
+    ],
+    ids=[
+        "nan",
+        "inf",
+        "two-coords",
+        "text",
+        "none",
+        "text-index",
+        "float-index",
+        "bool",
+        "36",
+        "i=6",
+    ],
+)
+def test_bad_pins_are_refused_naming_the_value(call):
+    sim = Simulation(small_scene(6))
+    before = (sim.control.pinned.copy(), sim.control.targets.copy())
+    with pytest.raises(SceneError):
+        call(sim)
+    np.testing.assert_array_equal(sim.control.pinned, before[0])
+    np.testing.assert_array_equal(sim.control.targets, before[1])
+
+
+def test_a_step_far_below_what_the_run_needs_is_refused_before_it_starts():
+    sim = Simulation(small_scene(6), dt=1e-30, stability="ignore")
+    with pytest.raises(SceneError, match=r"1e\+30 steps, more than the 1e\+07"):
+        sim.advance(1.0)
+    assert sim.steps == 0 and sim.time == 0.0
+    with pytest.raises(SceneError, match="inf steps"):
+        Simulation(small_scene(6)).advance(1e308)
+
+
+def test_a_cloth_bigger_than_the_memory_is_refused_with_the_numbers():
+    from pvcloth.simulation import PEAK_BYTES_PER_POINT, available_memory
+
+    have = available_memory()
+    if have is None or have > 4096**2 * PEAK_BYTES_PER_POINT:
+        pytest.skip("this machine could hold a 4096 x 4096 cloth")
+    scene = pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(4096, 4096)))
+    with pytest.raises(
+        SceneError, match=r"cloth.resolution: 4096 x 4096 = 16,777,216 points .* GB"
+    ):
+        Simulation(scene)
+
+
+def test_a_cloth_with_no_springs_falls_at_the_automatic_frame_step():
+    scene = pvcloth.Scene(
+        springs=pvcloth.SpringsSpec(structural=None, shear=None, bending=None),
+        pins=pvcloth.PinSpec(corners=()),
+    )
+    sim = Simulation(scene)
+    assert sim.stable_dt() == np.inf and sim.dt == pytest.approx(1 / 60)
+    sim.advance(0.5)
+    np.testing.assert_allclose(
+        sim.positions[:, 2],
+        1.0 + sim.model.rest_positions[:, 2] - 1.0 - 0.5 * 9.81 * 0.5**2,
+        atol=0.1,
+    )
+
+
+@pytest.mark.parametrize(
+    "content, words",
+    [
+        (b"name = '\xff\xfe'\n", "not a text file in UTF-8"),
+        (b"a = " + b"[" * 5000 + b"]" * 5000, "nested too deeply"),
+        (b"[cloth\n", "not valid TOML"),
+    ],
+    ids=["latin-1", "deep", "broken"],
+)
+def test_unreadable_scene_files_raise_scene_errors(tmp_path, content, words):
+    path = tmp_path / "scene.toml"
+    path.write_bytes(content)
+    with pytest.raises(SceneError, match=words):
+        pvcloth.load_scene(path)
+
+
+def test_a_path_with_a_nul_character_is_a_scene_error():
+    with pytest.raises(SceneError, match="null byte"):
+        pvcloth.load_scene("a\x00b.toml")

@@ -187,11 +187,18 @@ def test_obstacles_round_trip_through_plain_data():
 @pytest.mark.parametrize(
     ("obstacle", "key", "words"),
     [
-        ({"type": "sphere", "radius": -0.2}, "obstacles[0].radius", "greater than 0"),
+        ({"type": "sphere", "radius": -0.2}, "obstacles[0].radius", "at least 0.0001"),
+        ({"type": "sphere", "radius": 1e308}, "obstacles[0].radius", "at most 10000"),
+        (
+            {"type": "sphere", "radius": 0.1, "thickness": 1e308},
+            "obstacles[0].thickness",
+            "at most 1",
+        ),
+        ({"type": "ground", "normal": [0, 0, 1e-320]}, "obstacles[0].normal", "nearly) zero"),
         ({"type": "sphere"}, "obstacles[0].radius", "needs a radius"),
-        ({"type": "box", "size": [1.0, 0.0, 1.0]}, "obstacles[0].size[1]", "greater than 0"),
+        ({"type": "box", "size": [1.0, 0.0, 1.0]}, "obstacles[0].size[1]", "at least 0.0001"),
         ({"type": "box"}, "obstacles[0].size", "needs size"),
-        ({"type": "ground", "normal": [0, 0, 0]}, "obstacles[0].normal", "must not be zero"),
+        ({"type": "ground", "normal": [0, 0, 0]}, "obstacles[0].normal", "nearly) zero"),
         ({"type": "ground", "normal": [0, float("nan"), 1]}, "obstacles[0].normal[1]", "finite"),
         ({"type": "box", "size": [1, 1, 1], "radius": 1}, "obstacles[0].radius", "not used"),
         ({"type": "cone"}, "obstacles[0].type", "sphere, box, ground"),
