@@ -208,11 +208,9 @@ def test_a_cloth_with_no_springs_falls_at_the_automatic_frame_step():
     sim = Simulation(scene)
     assert sim.stable_dt() == np.inf and sim.dt == pytest.approx(1 / 60)
     sim.advance(0.5)
-    np.testing.assert_allclose(
-        sim.positions[:, 2],
-        1.0 + sim.model.rest_positions[:, 2] - 1.0 - 0.5 * 9.81 * 0.5**2,
-        atol=0.1,
-    )
+    # free fall, with symplectic Euler's first-order error g t dt / 2 = 0.04 m
+    fall = sim.model.rest_positions[:, 2] - 0.5 * 9.81 * 0.5**2
+    np.testing.assert_allclose(sim.positions[:, 2], fall, atol=0.05)
 
 
 @pytest.mark.parametrize(
