@@ -70,55 +70,109 @@ def save_checkpoint(sim, path) -> Path:
 def load_checkpoint(path):
     """Rebuild the simulation saved in ``path``.
 
+    Every entry is checked before use: its type, shape and range, and that
+    its numbers are finite, so a damaged or edited file cannot start a run
+    that hangs or returns NaN.
+
     Raises
     ------
     CheckpointError
-        If the file cannot be read, is not a pvcloth checkpoint, or its
-        arrays do not fit its scene. Nothing is changed in that case.
+        If the file cannot be read, is not a pvcloth checkpoint, or any entry
+        is missing, of the wrong kind or out of range. Nothing is changed in
+        that case.
     """
-    from .scene import Scene
-    from .simulation import Simulation
-
     path = Path(path)
     try:
         with np.load(path, allow_pickle=False) as archive:
             data = {key: archive[key] for key in archive.files}
     except FileNotFoundError:
         raise CheckpointError(f"no checkpoint at {path}") from None
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as error:
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError, RuntimeError) as error:
         raise CheckpointError(f"{path} is not a readable checkpoint: {error}") from None
+    except Exception as error:  # numpy's readers raise more kinds on damaged archives
+        raise CheckpointError(f"{path} is not a readable checkpoint: {error!r}") from None
+    try:
+        return _rebuild(data, path)
+    except CheckpointError:
+        raise
+    except PvclothError as error:
+        raise CheckpointError(f"{path}: its contents are invalid: {error}") from None
+
+
+def _entry(data: dict, key: str, path: Path, kind: str, shape=None) -> np.ndarray:
+    """``data[key]``, checked to be of numpy kind ``kind`` (and ``shape``)
+    and, for numbers, finite."""
+    if key not in data:
+        raise CheckpointError(f"{path} lacks the entry {key!r}")
+    value = data[key]
+    if value.dtype.kind not in kind or (shape is not None and value.shape != shape):
+        raise CheckpointError(
+            f"{path}: {key!r} is {value.dtype} of shape {value.shape}; expected "
+            f"{ {'U': 'text', 'f': 'floats', 'iu': 'integers', 'b': 'booleans'}[kind] } "
+            f"of shape {shape if shape is not None else 'any'}"
+        )
+    if kind == "f" and not np.isfinite(value).all():
+        raise CheckpointError(f"{path}: {key!r} holds values that are not finite")
+    return value
+
+
+def _scalar(data, key, path, kind, low, high):
+    value = _entry(data, key, path, kind, ()).item()
+    if not low <= value <= high:
+        raise CheckpointError(f"{path}: {key!r} is {value!r}; expected {low} to {high}")
+    return value
+
+
+def _rebuild(data: dict, path: Path):
+    from .integrators import INTEGRATORS
+    from .scene import MAX_LENGTH, Scene
+    from .simulation import MAX_STEPS, SPEED_LIMIT, Simulation
+
     if str(data.get("tag", "")) != TAG:
         raise CheckpointError(f"{path} is not a pvcloth checkpoint (no {TAG!r} tag)")
-    if int(data["version"]) != VERSION:
+    version = _entry(data, "version", path, "iu", ()).item()
+    if version != VERSION:
         raise CheckpointError(
-            f"{path} has checkpoint version {int(data['version'])}; "
-            f"this pvcloth reads version {VERSION}"
+            f"{path} has checkpoint version {version}; this pvcloth reads version {VERSION}"
         )
     try:
-        scene = Scene.from_dict(json.loads(str(data["scene"])))
-        sim = Simulation(
-            scene, integrator=str(data["integrator"]), dt=float(data["dt"]), stability="ignore"
-        )
-        n = sim.model.n_points
-        for key, shape in (("x", (n, 3)), ("v", (n, 3)), ("targets", (n, 3)), ("pinned", (n,))):
-            if data[key].shape != shape:
-                raise CheckpointError(
-                    f"{path}: {key} has shape {data[key].shape}, the scene needs {shape}"
-                )
-    except PvclothError as error:
-        if isinstance(error, CheckpointError):
-            raise
-        raise CheckpointError(f"{path}: its scene is invalid: {error}") from None
-    except KeyError as error:
-        raise CheckpointError(f"{path} lacks the entry {error}") from None
-    sim.state.x[:] = data["x"]
-    sim.state.v[:] = data["v"]
-    sim.state.t = float(data["t"])
-    sim.steps = int(data["steps"])
-    sim._owed = float(data["owed"])
-    sim.control.pinned[:] = data["pinned"]
-    sim.control.targets[:] = data["targets"]
-    sim.control.refresh(sim.model)
+        scene = Scene.from_dict(json.loads(str(_entry(data, "scene", path, "U", ()))))
+    except (ValueError, RecursionError) as error:  # JSONDecodeError is a ValueError
+        raise CheckpointError(f"{path}: its scene is not readable JSON: {error}") from None
+    integrator = str(_entry(data, "integrator", path, "U", ()))
+    if integrator not in INTEGRATORS:
+        raise CheckpointError(f"{path}: unknown integrator {integrator!r}")
+    dt = _scalar(data, "dt", path, "f", 1e-300, 10.0)
+    sim = Simulation(scene, integrator=integrator, dt=dt, stability="ignore")
+    n = sim.model.n_points
+    x = _entry(data, "x", path, "f", (n, 3))
+    v = _entry(data, "v", path, "f", (n, 3))
+    targets = _entry(data, "targets", path, "f", (n, 3))
+    pinned = _entry(data, "pinned", path, "b", (n,))
+    for key, values, bound in (("x", x, MAX_LENGTH), ("targets", targets, MAX_LENGTH)):
+        if np.abs(values).max() > bound:
+            raise CheckpointError(f"{path}: {key!r} has a coordinate beyond +-{bound:g} m")
+    if np.abs(v).max() > SPEED_LIMIT:
+        raise CheckpointError(f"{path}: 'v' has a speed beyond {SPEED_LIMIT:g} m/s")
+    t = _scalar(data, "t", path, "f", 0.0, MAX_STEPS * dt)
+    steps = _scalar(data, "steps", path, "iu", 0, 2**62)
+    owed = _scalar(data, "owed", path, "f", 0.0, dt)  # never a whole step is owed
     prefix = "integrator_"
-    sim.integrator.set_state({k[len(prefix) :]: v for k, v in data.items() if k.startswith(prefix)})
+    extra = {}
+    for key in data:
+        if key.startswith(prefix):
+            values = _entry(data, key, path, "f")
+            if values.ndim != 1 or values.size > 3 * n:  # one value per free coordinate
+                raise CheckpointError(f"{path}: {key!r} has shape {values.shape}")
+            extra[key[len(prefix) :]] = values
+    sim.state.x[:] = x
+    sim.state.v[:] = v
+    sim.state.t = float(t)
+    sim.steps = int(steps)
+    sim._owed = float(owed)
+    sim.control.pinned[:] = pinned
+    sim.control.targets[:] = targets
+    sim.control.refresh(sim.model)
+    sim.integrator.set_state(extra)
+    sim.update_mesh()
     return sim

@@ -10,7 +10,7 @@ import numpy as np
 from .errors import DivergenceError, SceneError
 from .integrators import get_integrator
 from .model import build_model
-from .scene import STABILITY_POLICIES, Scene, load_scene
+from .scene import MAX_LENGTH, STABILITY_POLICIES, Scene, load_scene
 from .state import Control, State
 from .validation import choice, integer, real
 
@@ -25,6 +25,8 @@ STABLE_SHARE = 0.8
 SAFE_SHARE = 0.5
 #: Automatic step of an integrator that is stable at any step: a 60 fps frame.
 FRAME_DT = 1.0 / 60.0
+#: How far ``Simulation.scale_stiffness`` may take the springs from the scene's.
+MIN_STIFFNESS_SCALE, MAX_STIFFNESS_SCALE = 1e-6, 1e6
 #: Most steps one call may take: hours of wall time even for a tiny cloth.
 MAX_STEPS = 10**7
 #: Peak bytes per cloth point while a simulation is built: the stable-step
@@ -84,6 +86,8 @@ class Simulation:
         if not isinstance(scene, Scene):
             raise SceneError("scene", f"expected a pvcloth.Scene, got {type(scene).__name__}")
         self.scene = scene
+        #: Springs' stiffness and damping relative to the scene's (scale_stiffness).
+        self.stiffness_scale = 1.0
         _check_memory(scene)
         self.model = build_model(scene, backend)
         self.integrator = get_integrator(integrator or scene.solver.integrator)
@@ -298,15 +302,20 @@ class Simulation:
 
     @staticmethod
     def _target(position) -> np.ndarray:
-        """A pin target: three finite coordinates in metres."""
+        """A pin target: three finite coordinates in metres, within
+        ``MAX_LENGTH`` of the origin (like every position in a scene)."""
         try:
             target = np.asarray(position, dtype=float)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             target = None
         if target is None or target.shape != (3,) or not np.isfinite(target).all():
             raise SceneError(
                 "position",
                 f"expected three finite coordinates (x, y, z) in metres, got {position!r}",
+            )
+        if np.abs(target).max() > MAX_LENGTH:
+            raise SceneError(
+                "position", f"each coordinate must be within +-{MAX_LENGTH:g} m, got {position!r}"
             )
         return target
 
@@ -343,8 +352,21 @@ class Simulation:
     def scale_stiffness(self, factor: float) -> None:
         """Multiply every spring's stiffness and damping by ``factor`` (> 0),
         e.g. from a slider; the step is re-checked against the new limit and
-        split into substeps if it became unstable."""
+        split into substeps if it became unstable.
+
+        The springs may end up between :data:`MIN_STIFFNESS_SCALE` and
+        :data:`MAX_STIFFNESS_SCALE` times the scene's (beyond that the
+        stable-step arithmetic under- or overflows); ``stiffness_scale`` says
+        where they are."""
         factor = real("factor", factor, minimum=0.0, exclusive=True)
+        scale = self.stiffness_scale * factor
+        if not MIN_STIFFNESS_SCALE <= scale <= MAX_STIFFNESS_SCALE:
+            raise SceneError(
+                "factor",
+                f"{factor:g} would make the springs {scale:.3g} times the scene's; allowed "
+                f"is {MIN_STIFFNESS_SCALE:g} to {MAX_STIFFNESS_SCALE:g} times",
+            )
+        self.stiffness_scale = scale
         for springs in self.model.springs:
             for group in springs.groups:
                 group.stiffness *= factor

@@ -22,6 +22,7 @@ readable series of the frames done.
 from __future__ import annotations
 
 import contextlib
+import glob
 import os
 import tempfile
 from pathlib import Path
@@ -46,9 +47,14 @@ def quads(shape: tuple[int, int]) -> np.ndarray:
 
 
 def atomic_write(path: Path, write) -> None:
-    """Call ``write(temporary_path)`` and rename the result onto ``path``."""
+    """Call ``write(temporary_path)`` and rename the result onto ``path``.
+
+    The temporary file is hidden beside ``path`` and named with this
+    process's id; temporaries left there by a process that died (a killed
+    save) are removed first, so they do not pile up."""
+    remove_orphaned_temporaries(path)
     handle, temporary = tempfile.mkstemp(
-        dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix
+        dir=path.parent, prefix=f".{path.stem}.{os.getpid()}.", suffix=path.suffix
     )
     os.close(handle)
     try:
@@ -57,6 +63,28 @@ def atomic_write(path: Path, write) -> None:
     except BaseException:
         Path(temporary).unlink(missing_ok=True)
         raise
+
+
+def remove_orphaned_temporaries(path: Path) -> list[Path]:
+    """Delete the hidden temporaries of ``path`` (``.STEM.PID.*SUFFIX``) whose
+    writing process no longer runs; return what was deleted."""
+    removed = []
+    for candidate in path.parent.glob(f".{glob.escape(path.stem)}.*{glob.escape(path.suffix)}"):
+        pid = candidate.name[len(path.stem) + 2 :].split(".", 1)[0]
+        if pid.isdigit() and not _running(int(pid)):
+            candidate.unlink(missing_ok=True)
+            removed.append(candidate)
+    return removed
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's process: alive
+        return True
+    return True
 
 
 def _pvd_index(entries: list[tuple[float, str]]) -> str:
