@@ -7,6 +7,7 @@ import sys
 import time
 
 from .errors import PvclothError
+from .signals import Terminated, check, handled
 
 
 def _add_overrides(parser: argparse.ArgumentParser) -> None:
@@ -49,6 +50,7 @@ def cmd_simulate(args) -> None:
         range(frames), desc=f"simulating {sim.scene.name}", unit="frame", disable=args.quiet
     ):
         sim.advance(seconds / frames)
+        check()
     wall = time.perf_counter() - start
     energy = sim.energy()
     z = sim.positions[:, 2]
@@ -232,17 +234,38 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Exit codes of a run stopped by Ctrl-C (SIGINT) and by SIGTERM, as a shell gives.
+EXIT_INTERRUPTED, EXIT_TERMINATED = 130, 143
+
+
+def _interruption(error: BaseException) -> BaseException | None:
+    """The KeyboardInterrupt (or Terminated) behind an error, if any."""
+    while error is not None:
+        if isinstance(error, KeyboardInterrupt):
+            return error
+        error = error.__cause__
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``pvcloth`` console command."""
+    """Entry point of the ``pvcloth`` console command.
+
+    Exit codes: 0 done, 2 pvcloth's own error (a message, no traceback),
+    130 interrupted by Ctrl-C, 143 stopped by SIGTERM; what an interrupted
+    command had written stays valid and its message says what was kept."""
     args = build_parser().parse_args(argv)
     try:
-        args.func(args)
-    except PvclothError as error:
-        print(f"pvcloth: error: {error}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("pvcloth: interrupted", file=sys.stderr)
-        return 130
+        with handled():
+            args.func(args)
+    except (PvclothError, KeyboardInterrupt) as error:
+        interruption = _interruption(error)
+        if interruption is None:
+            print(f"pvcloth: error: {error}", file=sys.stderr)
+            return 2
+        what = "terminated" if isinstance(interruption, Terminated) else "interrupted"
+        detail = f": {error}" if isinstance(error, PvclothError) else ""
+        print(f"pvcloth: {what}{detail}", file=sys.stderr)
+        return EXIT_TERMINATED if isinstance(interruption, Terminated) else EXIT_INTERRUPTED
     return 0
 
 

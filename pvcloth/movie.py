@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from .errors import MovieInterrupted, SceneError
+from .signals import deferred
+from .timeseries import remove_orphaned_temporaries
 
 FORMATS = (".gif", ".mp4", ".png")
 
@@ -161,17 +163,24 @@ def render(
         raise SceneError("fps", f"must be a number in (0, 1000], got {fps!r}")
     sim.check_run_length((frames - 1) / fps)  # refused before any work, not after hours
     path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f".{path.stem}.partial{path.suffix}")
+    # Hidden, named with this process's id: one left by a killed run is
+    # removed by the next run's atomic_write clean-up.
+    remove_orphaned_temporaries(path)
+    partial = path.with_name(f".{path.stem}.{os.getpid()}.partial{path.suffix}")
     stats = RenderStats(path, 0)
 
     # notebook=False: in Jupyter, show() would otherwise put a picture or a
     # widget of this plotter in the cell, besides the movie asked for.
     plotter = pv.Plotter(off_screen=True, notebook=False, window_size=list(size))
     writer = None
+    # Only the physics is interrupted at once: a Ctrl-C or SIGTERM that comes
+    # while VTK draws (which would swallow it), or while a frame is appended
+    # or the file finished, takes effect when that step is done.
     try:
-        view = ClothView(sim, plotter)
-        plotter.show(auto_close=False)
-        writer = _FrameWriter(partial, fps)
+        with deferred():
+            view = ClothView(sim, plotter)
+            plotter.show(auto_close=False)
+            writer = _FrameWriter(partial, fps)
         bar = tqdm(range(frames), desc=f"rendering {path.name}", unit="frame", disable=not progress)
         for n in bar:
             if before_frame is not None:
@@ -180,27 +189,32 @@ def render(
             if n:
                 sim.advance(1.0 / fps)
             t1 = time.perf_counter()
-            view.update()
-            plotter.render()
-            image = plotter.screenshot(return_img=True)
-            t2 = time.perf_counter()
-            writer.append(image)
+            with deferred():
+                view.update()
+                plotter.render()
+                image = plotter.screenshot(return_img=True)
+                t2 = time.perf_counter()
+                writer.append(image)
+                stats.frames += 1
             t3 = time.perf_counter()
             stats.physics.append(t1 - t0)
             stats.drawing.append(t2 - t1)
             stats.encoding.append(t3 - t2)
-            stats.frames += 1
             bar.set_postfix_str(f"t={sim.time:.2f}s")
-        t0 = time.perf_counter()
-        writer.close()
-        stats.closing = time.perf_counter() - t0
-        writer = None
-        os.replace(partial, path)
+        with deferred():
+            t0 = time.perf_counter()
+            writer.close()
+            stats.closing = time.perf_counter() - t0
+            writer = None
+            os.replace(partial, path)
         return stats
     except (Exception, KeyboardInterrupt) as error:
-        raise _salvage(writer, partial, path, stats.frames, error) from error
+        with deferred(then_raise=False):  # the run is stopping already: finish the salvage
+            interrupted = _salvage(writer, partial, path, stats.frames, error)
+        raise interrupted from error
     finally:
-        plotter.close()
+        with deferred(then_raise=False):
+            plotter.close()
 
 
 def _salvage(writer, partial: Path, path: Path, done: int, error) -> MovieInterrupted:

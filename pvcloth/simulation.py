@@ -281,7 +281,13 @@ class Simulation:
         return {"kinetic": kinetic, "potential": potential, "total": kinetic + potential}
 
     def stable_dt(self) -> float:
-        """The integrator's largest stable step near the current state."""
+        """The integrator's largest stable step near the current state.
+
+        It accounts for the springs, their dashpots and air damping (the
+        linearised cloth), not for the wind or contact: a strong wind on a
+        light cloth can need a smaller step than this, which neither the
+        ``refuse`` check nor ``substep`` will know (the divergence guard
+        still stops such a run, and its message says so)."""
         return self.integrator.stable_dt(self.model, self.state, self.control)
 
     # -- pins ------------------------------------------------------------------
@@ -502,11 +508,16 @@ class Simulation:
                 stable = None
         if stable and 0 < stable < math.inf:
             message += (
-                f" The largest stable step here is about {stable:.3g} s; "
+                f" The largest stable step of the springs here is about {stable:.3g} s; "
                 f"try dt = {0.5 * stable:.3g} s."
             )
         else:
             message += " Try a smaller dt or the symplectic_euler integrator with damping."
+        if any(term.name == "wind" for term in self.model.forces):
+            message += (
+                " That estimate leaves the wind out, which can make a step unstable on its own "
+                "(strong wind on a light cloth): a smaller step or weaker wind may be needed."
+            )
         return message
 
 

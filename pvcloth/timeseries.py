@@ -14,9 +14,11 @@ Formats, by extension:
     one OBJ file per frame in ``OUT_frames/`` for Blender (import as a mesh
     sequence, e.g. with the Stop-motion-OBJ add-on).
 
-The PVD index is rewritten atomically after every frame and each frame file
-is renamed into place only when complete, so an interrupted export leaves a
-readable series of the frames done.
+Every format is written into a hidden staging folder beside the output and
+moved into place when the writing stops, finished or interrupted (Ctrl-C,
+SIGTERM, an error): the frames done then form a readable series, and a run
+killed outright (SIGKILL) leaves an earlier export at that path as it was.
+A re-export replaces the whole ``OUT_frames/`` folder, old frames and all.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from __future__ import annotations
 import contextlib
 import glob
 import os
+import shutil
 import tempfile
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -32,6 +35,7 @@ import meshio
 import numpy as np
 
 from .errors import ExportInterrupted, SceneError
+from .signals import deferred
 
 FORMATS = (".pvd", ".xdmf", ".obj")
 
@@ -72,7 +76,10 @@ def remove_orphaned_temporaries(path: Path) -> list[Path]:
     for candidate in path.parent.glob(f".{glob.escape(path.stem)}.*{glob.escape(path.suffix)}"):
         pid = candidate.name[len(path.stem) + 2 :].split(".", 1)[0]
         if pid.isdigit() and not _running(int(pid)):
-            candidate.unlink(missing_ok=True)
+            if candidate.is_dir():  # an export's staging folder
+                shutil.rmtree(candidate, ignore_errors=True)
+            else:
+                candidate.unlink(missing_ok=True)
             removed.append(candidate)
     return removed
 
@@ -152,27 +159,41 @@ def export(sim, output, *, frames: int = 60, fps: float = 30.0, progress: bool =
     rest = sim.model.rest_positions
     done = 0
     bar = tqdm(range(frames), desc=f"exporting {path.name}", unit="frame", disable=not progress)
+    # Everything is written into a hidden staging folder beside the output
+    # and moved into place when the writing stops (finished or interrupted),
+    # so a run killed midway leaves an earlier export at this path as it was;
+    # the staging folder of a dead process is removed by the next export.
+    remove_orphaned_temporaries(path)
+    staging = path.with_name(f".{path.stem}.{os.getpid()}.staging{path.suffix}")
+    staging.mkdir()
+    folder = f"{path.stem}_frames"
+    entries: list[tuple[float, str]] = []  # PVD index: (time, frame file)
     try:
         if suffix == ".xdmf":
+            # meshio writes the .h5 as it goes and the .xdmf when closed.
             # meshio 5.3 writes the HDF5 file into the working directory but
-            # its XDMF points beside itself: write from the output's folder.
-            with contextlib.chdir(path.parent), meshio.xdmf.TimeSeriesWriter(path.name) as writer:
-                writer.write_points_cells(rest, cells)
-                for n in bar:
-                    if n:
-                        sim.advance(1.0 / fps)
-                    writer.write_data(
-                        sim.time,
-                        point_data={
-                            "displacement": sim.positions - rest,
-                            "velocity": np.array(sim.velocities),
-                        },
-                    )
-                    done += 1
+            # its XDMF points beside itself: write from the staging folder.
+            with contextlib.chdir(staging):
+                writer = meshio.xdmf.TimeSeriesWriter(path.name).__enter__()
+                try:
+                    writer.write_points_cells(rest, cells)
+                    for n in bar:
+                        if n:
+                            sim.advance(1.0 / fps)
+                        with deferred():  # a frame is written whole
+                            writer.write_data(
+                                sim.time,
+                                point_data={
+                                    "displacement": sim.positions - rest,
+                                    "velocity": np.array(sim.velocities),
+                                },
+                            )
+                            done += 1
+                finally:
+                    with deferred(then_raise=False):  # closing writes the .xdmf itself
+                        writer.__exit__(None, None, None)
             return path
-        folder = path.with_name(f"{path.stem}_frames")
-        folder.mkdir(exist_ok=True)
-        entries = []
+        (staging / folder).mkdir()
         for n in bar:
             if n:
                 sim.advance(1.0 / fps)
@@ -182,12 +203,12 @@ def export(sim, output, *, frames: int = 60, fps: float = 30.0, progress: bool =
                 cells,
                 point_data={"velocity": np.array(sim.velocities)} if suffix == ".pvd" else None,
             )
-            atomic_write(folder / name, lambda tmp, mesh=mesh: meshio.write(tmp, mesh))
-            done += 1
-            if suffix == ".pvd":
-                entries.append((sim.time, f"{folder.name}/{name}"))
-                atomic_write(path, lambda tmp: Path(tmp).write_text(_pvd_index(entries)))
-        return path if suffix == ".pvd" else folder
+            with deferred():  # a frame is written whole
+                meshio.write(staging / folder / name, mesh)
+                if suffix == ".pvd":
+                    entries.append((sim.time, f"{folder}/{name}"))
+                done += 1
+        return path if suffix == ".pvd" else path.with_name(folder)
     except (Exception, KeyboardInterrupt) as error:
         reason = "interrupted" if isinstance(error, KeyboardInterrupt) else str(error)
         raise ExportInterrupted(
@@ -195,3 +216,35 @@ def export(sim, output, *, frames: int = 60, fps: float = 30.0, progress: bool =
             f"the {done} frame(s) written in {path} stay readable",
             done,
         ) from error
+    finally:
+        with deferred(then_raise=False):  # once begun, moving into place must finish
+            _finish(staging, path, suffix, folder, entries, done)
+
+
+def _finish(staging: Path, path: Path, suffix: str, folder: str, entries, done: int) -> None:
+    """Move the frames written (if any) from ``staging`` into place, then
+    remove ``staging``."""
+    if done:  # the frames written form a valid series
+        if suffix == ".pvd":
+            (staging / path.name).write_text(_pvd_index(entries))
+        if suffix == ".xdmf":
+            names = [path.with_suffix(".h5").name, path.name]
+        else:
+            names = [folder] + ([path.name] if suffix == ".pvd" else [])
+        _publish(staging, path.parent, names)
+    shutil.rmtree(staging, ignore_errors=True)
+
+
+def _publish(staging: Path, destination: Path, names: list[str]) -> None:
+    """Move ``names`` from ``staging`` into ``destination``, replacing what
+    is there: files by an atomic rename, folders by renaming the old one
+    aside first (so a re-export with fewer frames leaves none of the old)."""
+    for name in names:
+        source, target = staging / name, destination / name
+        if source.is_dir():
+            if target.exists():
+                aside = staging / f"{name}.replaced"
+                os.replace(target, aside)
+            os.replace(source, target)
+        else:
+            os.replace(source, target)

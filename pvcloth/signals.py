@@ -1,0 +1,68 @@
+"""Ctrl-C and SIGTERM that always stop a run, even inside VTK.
+
+A signal handler's exception raised while VTK runs a Python callback (as it
+does while rendering a frame) is printed and swallowed by VTK, so the run
+went on to the end as if nothing had happened. The handlers here record the
+signal; around calls into VTK (:func:`deferred`) they raise it only when the
+call returns, and the frame loops call :func:`check` between frames.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so that every writer keeps what is valid."""
+
+
+_pending: type[KeyboardInterrupt] | None = None
+_deferring = 0
+
+
+def _handler(signum, frame):
+    global _pending
+    _pending = Terminated if signum == signal.SIGTERM else KeyboardInterrupt
+    if not _deferring:
+        raise _pending()
+
+
+@contextlib.contextmanager
+def deferred(*, then_raise: bool = True):
+    """Within the block a signal is only recorded; it is raised when the
+    block ends (unless ``then_raise`` is false: for clean-up while a run is
+    already stopping). For calls into VTK, which would swallow it and log an
+    error, and for steps that must finish once begun (closing a file)."""
+    global _deferring
+    _deferring += 1
+    try:
+        yield
+    finally:
+        _deferring -= 1
+    if then_raise and not _deferring:
+        check()
+
+
+def check() -> None:
+    """Raise the Ctrl-C or SIGTERM received since :func:`handled` began, if
+    one was swallowed on its way."""
+    global _pending
+    if _pending is not None:
+        pending, _pending = _pending, None
+        raise pending()
+
+
+@contextlib.contextmanager
+def handled():
+    """Within the block, SIGINT raises KeyboardInterrupt and SIGTERM
+    :class:`Terminated`, and both are remembered for :func:`check`."""
+    global _pending
+    _pending = None
+    previous = {s: signal.signal(s, _handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, old in previous.items():
+            signal.signal(s, old)
+        _pending = None

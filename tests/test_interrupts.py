@@ -1,0 +1,94 @@
+"""Interrupted at a random moment, as a user or a scheduler would: Ctrl-C
+(SIGINT), SIGTERM or SIGKILL sent to ``pvcloth render`` and ``pvcloth export``
+while they write. Afterwards every output is valid: Ctrl-C and SIGTERM exit
+130 and 143 with a short message (no traceback) and keep the finished frames;
+SIGKILL leaves the earlier complete output at that path as it was; no hidden
+partial file stays behind once the next run has started."""
+
+from __future__ import annotations
+
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import imageio.v3 as iio
+import meshio
+import pytest
+
+from conftest import SCENES
+
+PVCLOTH = str(Path(sys.executable).with_name("pvcloth"))
+SCENE = str(SCENES / "hanging.toml")
+FORMATS = ["gif", "mp4", "png", "pvd", "xdmf", "obj"]
+SIGNALS = [signal.SIGINT, signal.SIGTERM, signal.SIGKILL]
+
+
+def _command(output: Path, frames: int) -> list[str]:
+    verb = "render" if output.suffix in (".gif", ".mp4", ".png") else "export"
+    args = [PVCLOTH, verb, SCENE, "-o", str(output), "--frames", str(frames), "--quiet"]
+    return args + (["--size", "160x120"] if verb == "render" else [])
+
+
+def frames_in(output: Path) -> int:
+    """Frames a reader finds in an output (each one read, so each is valid)."""
+    if output.suffix in (".gif", ".mp4"):
+        return len(list(iio.imiter(output)))
+    if output.suffix == ".png":
+        return 1 if iio.imread(output).size else 0
+    if output.suffix == ".xdmf":
+        with meshio.xdmf.TimeSeriesReader(output) as reader:
+            reader.read_points_cells()
+            for k in range(reader.num_steps):
+                reader.read_data(k)
+            return reader.num_steps
+    folder = output.with_name(f"{output.stem}_frames")
+    if output.suffix == ".pvd":
+        import pyvista as pv
+
+        reader = pv.get_reader(output)
+        for t in reader.time_values:
+            reader.set_active_time_value(t)
+            assert reader.read()[0].n_points > 0
+        return len(reader.time_values)
+    files = sorted(folder.glob("*.obj"))
+    for file in files:
+        assert meshio.read(file).points.shape[0] > 0
+    return len(files)
+
+
+def hidden_leftovers(folder: Path) -> list[Path]:
+    return [p for p in folder.rglob(".*") if p.is_file() or p.is_dir()]
+
+
+@pytest.mark.usefixtures("rendering")
+@pytest.mark.parametrize("kind", FORMATS)
+def test_signals_at_random_moments_leave_valid_outputs(kind, tmp_path):
+    rng = random.Random(f"pvcloth-{kind}")  # seeded: the same moments every run
+    output = tmp_path / f"cloth.{kind}"
+    subprocess.run(_command(output, 4), check=True, capture_output=True, timeout=300)
+    complete = frames_in(output)  # the earlier, complete output
+    for sig in SIGNALS:
+        run = subprocess.Popen(_command(output, 400), stderr=subprocess.PIPE, text=True)
+        time.sleep(rng.uniform(1.5, 4.0))  # start-up takes about 1.5 s
+        run.send_signal(sig)
+        _, err = run.communicate(timeout=120)
+        assert "Traceback" not in err, err
+        if sig == signal.SIGKILL:
+            assert run.returncode == -signal.SIGKILL
+            # the earlier output is untouched, whole and readable
+            assert frames_in(output) == complete
+            continue
+        expected = 130 if sig == signal.SIGINT else 143
+        assert run.returncode == expected, err
+        assert err.startswith("pvcloth: interrupted" if expected == 130 else "pvcloth: terminated")
+        if "no file written" not in err and "after 0 frame" not in err:
+            complete = frames_in(output)  # the kept frames are readable
+            assert complete >= 1
+        assert hidden_leftovers(tmp_path) == [], err
+    # a new run clears what the killed one left hidden, and completes
+    subprocess.run(_command(output, 3), check=True, capture_output=True, timeout=300)
+    assert frames_in(output) == (1 if kind == "png" else 3)
+    assert hidden_leftovers(tmp_path) == []
