@@ -16,30 +16,35 @@ from .errors import (
     SceneError,
     SweepError,
 )
-from .integrators import INTEGRATORS, Integrator, get_integrator
-from .model import Model, build_model
-from .scene import (
-    ClothSpec,
-    ObstacleSpec,
-    PinSpec,
-    Scene,
-    SolverSpec,
-    SpringSpec,
-    SpringsSpec,
-    WindSpec,
-    load_scene,
-)
-from .simulation import Simulation
-from .state import Control, State
 
 try:  # one source for the version: the installed package's metadata (pyproject.toml)
     __version__ = _metadata.version("pvcloth")
 except _metadata.PackageNotFoundError:  # running from a source tree that was never installed
     __version__ = "0+unknown"
 
-#: Output functions, imported on first use so that ``import pvcloth`` loads no
-#: drawing or file-format library (PEP 562 module ``__getattr__``).
+#: Everything but the errors is imported on first use (PEP 562 module
+#: ``__getattr__``): ``import pvcloth`` is quick and loads no NumPy, numba or
+#: drawing library until asked, so ``pvcloth --help`` answers at once and a
+#: Ctrl-C during start-up reaches the command's own handler.
 _LAZY = {
+    **{name: ("integrators", name) for name in ("INTEGRATORS", "Integrator", "get_integrator")},
+    **{name: ("model", name) for name in ("Model", "build_model")},
+    **{
+        name: ("scene", name)
+        for name in (
+            "ClothSpec",
+            "ObstacleSpec",
+            "PinSpec",
+            "Scene",
+            "SolverSpec",
+            "SpringSpec",
+            "SpringsSpec",
+            "WindSpec",
+            "load_scene",
+        )
+    },
+    "Simulation": ("simulation", "Simulation"),
+    **{name: ("state", name) for name in ("Control", "State")},
     "render": ("movie", "render"),
     "export": ("timeseries", "export"),
     "save_checkpoint": ("checkpoint", "save_checkpoint"),
@@ -52,8 +57,14 @@ def __getattr__(name: str):
         import importlib
 
         module, attribute = _LAZY[name]
-        return getattr(importlib.import_module(f".{module}", __name__), attribute)
+        value = getattr(importlib.import_module(f".{module}", __name__), attribute)
+        globals()[name] = value  # looked up once
+        return value
     raise AttributeError(f"module 'pvcloth' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
 
 
 __all__ = [

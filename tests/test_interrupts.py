@@ -92,3 +92,21 @@ def test_signals_at_random_moments_leave_valid_outputs(kind, tmp_path):
     subprocess.run(_command(output, 3), check=True, capture_output=True, timeout=300)
     assert frames_in(output) == (1 if kind == "png" else 3)
     assert hidden_leftovers(tmp_path) == []
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "sigterm"])
+def test_a_signal_during_start_up_gives_a_short_message(sig):
+    """Start-up (imports, compiling, the stable-step estimate) is interrupted
+    cleanly too: the command's handlers are in place within 0.2 s."""
+    rng = random.Random(f"start-up-{sig}")
+    for _ in range(4):
+        run = subprocess.Popen(
+            [PVCLOTH, "simulate", SCENE, "--seconds", "30", "--quiet"],
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        time.sleep(rng.uniform(0.3, 2.0))
+        run.send_signal(sig)
+        _, err = run.communicate(timeout=120)
+        assert run.returncode == (130 if sig == signal.SIGINT else 143), err
+        assert "Traceback" not in err and len(err.splitlines()) <= 2, err
