@@ -7,7 +7,7 @@ import sys
 import time
 
 from .errors import PvclothError
-from .signals import Terminated, check, handled
+from .signals import Terminated, check, deferred, handled
 
 
 def _add_overrides(parser: argparse.ArgumentParser) -> None:
@@ -84,11 +84,14 @@ def cmd_render(args) -> None:
 
 
 def cmd_run(args) -> None:
-    from .app import ClothApp, check_display
     from .movie import parse_size
 
+    with deferred():  # a signal inside VTK's module set-up crashed the process
+        from .app import ClothApp, check_display
     check_display()  # before building anything: VTK cannot say it has no screen
-    app = ClothApp(_simulation(args), fps=args.fps, window_size=parse_size(args.size))
+    sim = _simulation(args)
+    with deferred():  # a signal inside VTK's module set-up crashed the process
+        app = ClothApp(sim, fps=args.fps, window_size=parse_size(args.size))
     app.run()
 
 

@@ -149,10 +149,7 @@ def render(
     >>> stats.path.name, stats.frames, round(sim.time, 3)
     ('hanging.gif', 6, 0.167)
     """
-    import pyvista as pv
     from tqdm.auto import tqdm
-
-    from .view import ClothView
 
     path = Path(output)
     if path.suffix.lower() not in FORMATS:
@@ -171,7 +168,12 @@ def render(
 
     # notebook=False: in Jupyter, show() would otherwise put a picture or a
     # widget of this plotter in the cell, besides the movie asked for.
-    plotter = pv.Plotter(off_screen=True, notebook=False, window_size=list(size))
+    with deferred():  # a signal inside VTK's module set-up crashed the process
+        import pyvista as pv
+
+        from .view import ClothView
+
+        plotter = pv.Plotter(off_screen=True, notebook=False, window_size=list(size))
     writer = None
     # Only the physics is interrupted at once: a Ctrl-C or SIGTERM that comes
     # while VTK draws (which would swallow it), or while a frame is appended

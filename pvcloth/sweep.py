@@ -32,8 +32,10 @@ import csv
 import hashlib
 import itertools
 import json
+import logging
 import math
 import re
+import signal
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,6 +44,7 @@ import numpy as np
 
 from .errors import DivergenceError, SceneError, SweepError
 from .scene import Scene
+from .signals import deferred
 
 FIELDS = [
     "id",
@@ -320,9 +323,20 @@ def _client(scheduler: str | None, workers: int | None):
             return Client(scheduler, timeout="10s"), None
         except OSError as error:
             raise SweepError(f"cannot reach the Dask scheduler at {scheduler}: {error}") from None
-    cluster = LocalCluster(
-        n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
-    )
+    # The worker processes start with Ctrl-C ignored (an ignored signal stays
+    # ignored in a child): it is this process that stops the sweep and closes
+    # them, instead of each printing the traceback of its interrupted loop.
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,  # workers' warnings (a cancelled task) are no news
+        )
+    finally:
+        signal.signal(signal.SIGINT, previous)
     return Client(cluster), cluster
 
 
@@ -374,6 +388,7 @@ def run_sweep(
             client, cluster = _client(scheduler, workers)
         from dask.distributed import as_completed
 
+        references, futures = {}, []
         try:
             groups: dict[str, list[Unit]] = {}
             for unit in units:  # references see every step swept, done or not
@@ -406,11 +421,18 @@ def run_sweep(
                 bar.close()
             finally:
                 writer.close()
+        except KeyboardInterrupt:
+            # Stop the work before the workers go, so that they end quietly
+            # instead of printing the tracebacks of their cancelled tasks.
+            with deferred(then_raise=False):
+                client.cancel(list(references.values()) + futures, force=True)
+            raise
         finally:
             if own:
-                client.close()
-                if cluster is not None:
-                    cluster.close()
+                with deferred(then_raise=False):  # a second Ctrl-C must not break the shutdown
+                    client.close()
+                    if cluster is not None:
+                        cluster.close()
     order = {u.id: n for n, u in enumerate(units)}
     rows = [row for row in read_rows(path) if row["id"] in order]
     return sorted(rows, key=lambda row: order[row["id"]])

@@ -8,6 +8,7 @@ partial file stays behind once the next run has started."""
 from __future__ import annotations
 
 import random
+import re
 import signal
 import subprocess
 import sys
@@ -87,6 +88,9 @@ def test_signals_at_random_moments_leave_valid_outputs(kind, tmp_path):
         if "no file written" not in err and "after 0 frame" not in err:
             complete = frames_in(output)  # the kept frames are readable
             assert complete >= 1
+            said = re.search(r"stopped after (\d+) frame", err)
+            if said and kind != "png":  # as many frames as the message says
+                assert complete == int(said.group(1)), err
         assert hidden_leftovers(tmp_path) == [], err
     # a new run clears what the killed one left hidden, and completes
     subprocess.run(_command(output, 3), check=True, capture_output=True, timeout=300)
@@ -110,3 +114,20 @@ def test_a_signal_during_start_up_gives_a_short_message(sig):
         _, err = run.communicate(timeout=120)
         assert run.returncode == (130 if sig == signal.SIGINT else 143), err
         assert "Traceback" not in err and len(err.splitlines()) <= 2, err
+
+
+def test_ctrl_c_stops_a_sweep_quietly_and_the_rerun_finishes_it(tmp_path):
+    pytest.importorskip("dask.distributed")
+    command = [PVCLOTH, "sweep", SCENE, "--set", "cloth.resolution=6",
+               "--set", "solver.dt=1e-4:1e-3:12log", "--duration", "0.3", "--workers", "2",
+               "-o", str(tmp_path), "--quiet"]  # fmt: skip
+    run = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
+    time.sleep(5)  # the cluster is up, rows are being written
+    run.send_signal(signal.SIGINT)
+    _, err = run.communicate(timeout=120)
+    if run.returncode == 0:
+        pytest.skip("the sweep finished before the signal came")
+    assert run.returncode == 130 and err.strip() == "pvcloth: interrupted", err
+    rerun = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert rerun.returncode == 0, rerun.stderr
+    assert "wrote" in rerun.stdout and "(12 runs)" in rerun.stdout
