@@ -106,11 +106,27 @@ def update_cloth_mesh(grid: pv.StructuredGrid, sim) -> None:
         grid.point_data.set_array(values, name)
 
 
+#: Scalar-bar titles, with units, of the point data on ``Simulation.mesh``.
+FIELD_TITLES = {
+    "velocity": "velocity (m/s)",
+    "speed": "speed (m/s)",
+    "stretch": "stretch (length / rest length)",
+    "pinned": "pinned (1 = yes)",
+}
+
+
 def plot_cloth(sim, **kwargs):
     """``sim.mesh.plot(**kwargs)`` in the cloth's colour and smooth shading,
-    unless ``scalars`` or ``color`` say otherwise."""
-    if kwargs.get("scalars") is None:
+    unless ``scalars`` or ``color`` say otherwise; a field of the mesh gets a
+    scalar bar titled with its unit."""
+    scalars = kwargs.get("scalars")
+    if scalars is None:
         kwargs.setdefault("color", CLOTH_COLOR)
+    elif isinstance(scalars, str) and scalars in FIELD_TITLES:
+        bar = dict(kwargs.get("scalar_bar_args") or {})
+        bar.setdefault("title", FIELD_TITLES[scalars])
+        bar.setdefault("fmt", "%.4g")  # stretch varies in the third decimal
+        kwargs["scalar_bar_args"] = bar
     kwargs.setdefault("smooth_shading", True)
     return sim.mesh.plot(**kwargs)
 
