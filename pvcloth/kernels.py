@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 import os
+import types
 
 import numpy as np
 
@@ -233,9 +234,23 @@ if numba is not None:
     def _compile(function):
         """A serial and a threaded build of one kernel. Threads pay only on
         big grids: waking them costs microseconds, more when other thread
-        pools (BLAS) compete for the cores."""
+        pools (BLAS) compete for the cores.
+
+        numba names a function's on-disk cache after its qualified name and
+        keys it by signature and machine, not by the compile flags, so two
+        builds of one function would share one entry and whichever compiled
+        first would serve both. The threaded build is therefore made from a
+        copy of the function under a name of its own."""
         serial = njit(fastmath=FASTMATH, cache=True)(function)
-        threaded = njit(fastmath=FASTMATH, cache=True, parallel=True)(function)
+        twin = types.FunctionType(
+            function.__code__,
+            function.__globals__,
+            f"{function.__name__}_threaded",
+            function.__defaults__,
+            function.__closure__,
+        )
+        twin.__qualname__ = f"{function.__qualname__}_threaded"
+        threaded = njit(fastmath=FASTMATH, cache=True, parallel=True)(twin)
         return serial, threaded
 
     _SPRINGS = _compile(_spring_forces)

@@ -66,3 +66,23 @@ def test_backend_choice_and_errors(monkeypatch):
     assert not Simulation(small_scene(4)).model.compiled
     with pytest.raises(SceneError, match="numba, numpy"):
         resolve_backend("cuda")
+
+
+def test_serial_and_threaded_builds_keep_separate_disk_caches(tmp_path):
+    """numba keys its cache by function name and signature, not by flags: the
+    threaded build must not be served the serial one's code (it was, when a
+    small cloth ran first, and big cloths then ran on one core)."""
+    import os
+    import subprocess
+    import sys
+
+    run = (
+        "import sys, pvcloth; n = int(sys.argv[1]);"
+        "pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(n, n)))).step()"
+    )
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    for n in (8, 80):  # serial first, then a grid big enough for the threaded build
+        subprocess.run([sys.executable, "-c", run, str(n)], env=env, check=True, timeout=300)
+    indexes = {p.name.split("-")[0] for p in tmp_path.rglob("*.nbi")}
+    for kernel in ("_spring_forces", "_kick_drift", "_body_forces"):
+        assert f"kernels.{kernel}" in indexes and f"kernels.{kernel}_threaded" in indexes, indexes
