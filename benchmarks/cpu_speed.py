@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 import pvcloth
+from pvcloth.kernels import threading_layer
 
 HERE = Path(__file__).parent
 SCENE = HERE.parent / "data" / "scenes" / "hanging.toml"
@@ -38,6 +39,25 @@ def pvcloth_solver(n: int, integrator: str, backend: str):
     )
     sim.advance(50 * DT)  # moving, and every kernel compiled
     return sim.step, sim
+
+
+KERNELS_ALONE = "kernels alone (symplectic_euler's forces and update)"
+
+
+def kernels_alone(sim):
+    """The compiled calls of one symplectic Euler step and nothing else:
+    ``Simulation.step()`` minus this is the Python around the kernels (pins,
+    divergence guard, bookkeeping)."""
+    from pvcloth.kernels import kick_drift
+
+    model, state, inv_mass = sim.model, sim.state.copy(), sim.control.inv_mass
+    f, x, v = (np.empty_like(state.x) for _ in range(3))
+
+    def step():
+        model.compute_forces(state.x, state.v, out=f)
+        kick_drift(state.x, state.v, f, inv_mass, DT, x, v, model.shape)
+
+    return step
 
 
 def taichi_solvers(n: int, reference):
@@ -110,6 +130,7 @@ def main() -> None:
         solvers["pvcloth symplectic_euler, NumPy path"], _ = pvcloth_solver(
             n, "symplectic_euler", "numpy"
         )
+        solvers[KERNELS_ALONE] = kernels_alone(reference)
         if have_taichi:
             extra, errors, sync = taichi_solvers(n, reference)
             for key in extra:
@@ -143,8 +164,11 @@ def write(results, checks, rounds, have_taichi) -> None:
         + f". Hanging scene (12 springs per point, gravity, air damping, two pins), "
         f"dt = {DT:g} s; median of {rounds} interleaved rounds, ms per step. "
         "pvcloth rows time `Simulation.step()`: float64, compiled kernels (numba, "
-        "two threads from 64 rows up) unless marked NumPy path. Ratios below 1 mean "
-        "pvcloth is faster.",
+        f"{numba.get_num_threads()} threads from 64 rows up on numba's "
+        f"`{threading_layer()}` threading layer) unless marked NumPy path. "
+        "Ratios below 1 mean pvcloth is faster. Floors at 256x256 on this CPU "
+        "(`../shared/MEASUREMENTS.md`): spring arithmetic 0.30 ms on two threads, memory "
+        "traffic of this layout 0.56-1.0 ms.",
         "",
         "| points per side | solver | ms per step | vs Taichi float32 | vs Taichi float64 |",
         "|---|---|---|---|---|",
@@ -155,6 +179,20 @@ def write(results, checks, rounds, have_taichi) -> None:
         ratio32 = f"{median / f32:.2f}" if f32 and key.startswith("pvcloth") else ""
         ratio64 = f"{median / f64:.2f}" if f64 and key.startswith("pvcloth") else ""
         lines.append(f"| {n} | {key} | {1e3 * median:.3f} | {ratio32} | {ratio64} |")
+    lines += [
+        "",
+        "Python around the kernels: `Simulation.step()` of symplectic Euler against its "
+        "compiled calls alone (forces and update on the same arrays), same rounds:",
+        "",
+        "| points per side | step (ms) | kernels alone (ms) | share outside the kernels |",
+        "|---|---|---|---|",
+    ]
+    for n, key, median, medians in results:
+        if key == KERNELS_ALONE:
+            step = medians["pvcloth symplectic_euler"]
+            lines.append(
+                f"| {n} | {1e3 * step:.3f} | {1e3 * median:.3f} | {1 - median / step:.0%} |"
+            )
     if checks:
         lines += [
             "",

@@ -16,13 +16,14 @@ import time
 from pathlib import Path
 
 import numpy as np
+from smoke import SMOKE
 
 import pvcloth
 from pvcloth import ObstacleSpec, WindSpec
 
 HERE = Path(__file__).parent
-SIZES = (32, 64)
-ROUNDS = 9
+SIZES = (8,) if SMOKE else (32, 64)
+ROUNDS = 1 if SMOKE else 9
 
 VARIANTS = {
     "plain (no wind, no obstacles)": {},
@@ -52,7 +53,7 @@ def main() -> None:
     rows = []
     for n in SIZES:
         sims = {name: simulation(n, changes) for name, changes in VARIANTS.items()}
-        steps = max(20, int(4e5 / n**2))
+        steps = 2 if SMOKE else max(20, int(4e5 / n**2))
         times = {name: [] for name in sims}
         for _ in range(ROUNDS):
             for name, sim in sims.items():

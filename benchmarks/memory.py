@@ -17,6 +17,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from smoke import SMOKE
+
 HERE = Path(__file__).parent
 
 PROBE = r"""
@@ -32,10 +34,10 @@ tracemalloc.stop()
 tracemalloc.start()
 sim = pvcloth.Simulation(scene, integrator=integrator, dt=1e-5, stability="ignore")
 built = tracemalloc.get_traced_memory()[0]
-for _ in range(1000):
+for _ in range(int(sys.argv[4])):
     sim.step()
 after_1000 = tracemalloc.get_traced_memory()[0]
-for _ in range(1000):
+for _ in range(int(sys.argv[4])):
     sim.step()
 after_2000, peak = tracemalloc.get_traced_memory()
 print(json.dumps(dict(check_peak=check_peak, built=built, after_1000=after_1000,
@@ -47,10 +49,18 @@ print(json.dumps(dict(check_peak=check_peak, built=built, after_1000=after_1000,
 def main() -> None:
     scene = HERE.parent / "data" / "scenes" / "hanging.toml"
     rows = []
-    for n in (64, 128, 256):
+    for n in (8,) if SMOKE else (64, 128, 256):
         for integrator in ("symplectic_euler", "rk4"):
             out = subprocess.run(
-                [sys.executable, "-c", PROBE, str(n), integrator, str(scene)],
+                [
+                    sys.executable,
+                    "-c",
+                    PROBE,
+                    str(n),
+                    integrator,
+                    str(scene),
+                    "2" if SMOKE else "1000",
+                ],
                 capture_output=True,
                 text=True,
                 check=True,

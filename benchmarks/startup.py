@@ -17,6 +17,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+from smoke import SMOKE
 
 HERE = Path(__file__).parent
 SCENE = HERE.parent / "data" / "scenes" / "hanging.toml"
@@ -36,15 +37,18 @@ def seconds(code: str, env: dict) -> float:
     return float(out.stdout.strip().splitlines()[-1])
 
 
+REPEATS = 1 if SMOKE else 5
+
+
 def main() -> None:
     rows = []
     for backend in ("numba", "numpy"):
         env = dict(os.environ, PVCLOTH_BACKEND=backend)
         rows.append(
-            (backend, "import pvcloth", np.median([seconds(IMPORT, env) for _ in range(5)]))
+            (backend, "import pvcloth", np.median([seconds(IMPORT, env) for _ in range(REPEATS)]))
         )
         cold, warm = [], []
-        for _ in range(5 if backend == "numba" else 0):
+        for _ in range(REPEATS if backend == "numba" else 0):
             with tempfile.TemporaryDirectory() as cache:
                 env["NUMBA_CACHE_DIR"] = cache
                 cold.append(seconds(FIRST_FRAME, env))
@@ -58,7 +62,7 @@ def main() -> None:
                 (
                     backend,
                     "import + first frame",
-                    np.median([seconds(FIRST_FRAME, env) for _ in range(5)]),
+                    np.median([seconds(FIRST_FRAME, env) for _ in range(REPEATS)]),
                 )
             )
     lines = [

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 from dask.distributed import Client, LocalCluster
+from smoke import SMOKE
 
 import pvcloth
 from pvcloth.sweep import parse_sets, run_sweep
@@ -29,6 +30,8 @@ SETS = [
     "solver.integrator=explicit_euler,symplectic_euler,verlet,rk4",
 ]
 DURATION = 0.1
+if SMOKE:
+    SETS, DURATION = ["solver.dt=1e-4,2e-4"], 0.01
 
 
 def main() -> None:

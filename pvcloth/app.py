@@ -1,13 +1,21 @@
 """The interactive window: the cloth animates in real time and can be dragged.
 
-A plotter timer advances the simulation at the frame rate. Each frame gets a
-wall-time budget for physics; when the physics cannot keep up, the frame
-simulates less time (slow motion, shown in the status line) instead of
-queueing ever more substeps.
+Two threads. The main one belongs to VTK: it draws at the frame rate and
+turns keys, sliders and the mouse into requests. One physics thread owns the
+simulation and carries the requests out in order, between chunks of time
+steps, so nothing that takes long (a stable-step estimate, an implicit step
+of a quarter second) stops the window from drawing and following the mouse.
+
+Time is the wall clock's: each chunk simulates the wall time that passed
+since the previous one, as many steps as fit in a frame's physics budget
+(at least one); what does not fit is dropped, which is slow motion, and the
+status line shows the real-time fraction actually reached (simulated over
+wall seconds, over the last second).
 """
 
 from __future__ import annotations
 
+import collections
 import ctypes
 import ctypes.util
 import dataclasses
@@ -15,30 +23,40 @@ import math
 import os
 import sys
 import time
+from pathlib import Path
 
-from .errors import DisplayError, DivergenceError
+import numpy as np
+
+from .errors import DisplayError, DivergenceError, SceneError
 from .integrators import INTEGRATORS
-from .interaction import ClothDragStyle
+from .interaction import ClothDragStyle, DragPath
 from .scene import WindSpec
+from .window_physics import PhysicsThread
 
 #: Wind the ``w`` key turns on in a scene that has none: across a cloth that
 #: hangs in the x-z plane, away from the default camera.
 DEFAULT_WIND = WindSpec(velocity=(0.0, 6.0, 0.0))
 
+#: Keys the window answers, by VTK key symbol, with what they do. No other
+#: key acts (VTK's and PyVista's default handlers are removed).
 KEYS = {
     "space": "pause / resume",
-    "n": "single step (one frame)",
+    "n": "one frame of cloth time, then pause",
     "b": "back to the start",
-    "i": "cycle integrator",
+    "i": "next integrator (with its own step)",
+    "bracketleft": "[ halve the step",
+    "bracketright": "] double the step",
+    "a": "automatic step (half the stable step, or 1/60 s)",
     "w": "wind on / off",
-    "k": "screenshot (pvcloth_NNN.png)",
+    "k": "screenshot (file name shown)",
     "u": "unpin points pinned by dragging",
     "q": "quit",
 }
-HELP = "drag the cloth with the left button (Shift+release: leave pinned)\n" + "\n".join(
-    f"{key:>5}: {what}" for key, what in KEYS.items()
+HELP = (
+    "drag the cloth with the left button (Shift+release: leave pinned)\n"
+    + "\n".join(f"{key:>5}: {what}" for key, what in KEYS.items() if not key.startswith("bracket"))
+    + "\n  [ ]: halve / double the step"
 )
-
 
 _NO_DISPLAY_HINT = (
     "On a machine without a screen, run it inside a virtual one: "
@@ -72,34 +90,48 @@ def check_display() -> None:
     xlib.XCloseDisplay(connection)
 
 
+def next_screenshot_path(folder: Path, stem: str) -> Path:
+    """``folder/STEM_NNN.png`` with the first number not taken, so no shot
+    overwrites an earlier one, from this session or another."""
+    taken = {p.name for p in folder.glob(f"{stem}_*.png")}
+    n = 1
+    while f"{stem}_{n:03d}.png" in taken:
+        n += 1
+    return folder / f"{stem}_{n:03d}.png"
+
+
 class ClothApp:
     """A PyVista window running a simulation that the mouse can drag.
 
     Parameters
     ----------
     sim : Simulation
+        Owned by the window's physics thread from here on: change it through
+        the window (keys, sliders, mouse) or :meth:`request`.
     fps : float
         Target frames per second.
     physics_share : float
-        Largest share of a frame's wall time that physics may use before the
-        animation slows down; less when drawing needs more of the frame.
+        Wall time of one chunk of steps, as a share of a frame: the longest
+        a request (a key, a slider) waits for the physics thread.
     off_screen : bool
         Build the window off-screen (for tests and benchmarks).
     window_size : (int, int)
+    shot_folder : path
+        Where ``k`` writes screenshots.
 
     Examples
     --------
     ``pvcloth run SCENE`` opens the window; from Python, ``ClothApp(sim).run()``
-    does. Off-screen, a frame can be driven by hand:
+    does. Off-screen, frames can be driven by hand:
 
     >>> import pvcloth
     >>> from pvcloth.app import ClothApp
     >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
     >>> app = ClothApp(sim, off_screen=True, window_size=(320, 240))
-    >>> app.frame()  # advance by at most one frame of real time, then draw
-    >>> 0 < sim.time <= 1 / 30
-    True
-    >>> app.plotter.close()
+    >>> app.single_frame(); app.wait()  # one frame of cloth time
+    >>> round(sim.time * 30, 6)
+    1.0
+    >>> app.close()
     """
 
     def __init__(
@@ -110,6 +142,7 @@ class ClothApp:
         physics_share: float = 0.6,
         off_screen: bool = False,
         window_size=(1024, 768),
+        shot_folder: str | Path = ".",
     ):
         import pyvista as pv
 
@@ -118,15 +151,14 @@ class ClothApp:
         self.sim = sim
         self.fps = fps
         self.physics_share = physics_share
-        self.budget = physics_share / fps
-        self.render_ms = 0.0
+        self.shot_folder = Path(shot_folder)
         self.message = ""
-        self.paused = False
-        self.speed = 1.0  # simulated seconds per wall second (1 = real time)
-        self.physics_ms = 0.0
-        self.frame_ms = 0.0
-        self._last_frame = None
-        self._shots = 0
+        self.render_ms = 0.0
+        self.frame_times: collections.deque[float] = collections.deque(maxlen=31)
+        self._requests = []  # Futures of requests not yet looked at
+        self._hovered = None
+        self._in_event_loop = False
+        self.physics = PhysicsThread(sim, chunk_seconds=physics_share / fps)
         # No multisampling: under software GL (llvmpipe) 4x MSAA triples the
         # cost of a frame (benchmarks/results/interactive_fps.md).
         self.plotter = pv.Plotter(
@@ -135,162 +167,371 @@ class ClothApp:
             title=f"pvcloth - {sim.scene.name}",
         )
         self.plotter.render_window.SetMultiSamples(0)  # before the window first draws
-        self.view = ClothView(sim, self.plotter)
-        self.style = ClothDragStyle(sim, on_change=self.view.update)
+        self.view = ClothView(sim, self.plotter, own_grid=True)
+        self.style = ClothDragStyle(
+            sim,
+            on_grab=self._grab,
+            on_move=self._drag_to,
+            on_release=self._release,
+            on_hover=self._hover,
+        )
         self.plotter.iren.style = self.style  # PyVista keeps it through show()
-        self.status = self.plotter.add_text("", position="upper_left", font_size=9)
-        self.plotter.add_text(HELP, position="lower_left", font_size=8)
-        for key, action in (
-            ("space", self.toggle_pause),
-            ("n", self.single_step),
-            ("b", self.restart),
-            ("i", self.cycle_integrator),
-            ("w", self.toggle_wind),
-            ("k", self.screenshot),
-            ("u", self.unpin_extras),
-        ):
+        self._add_handles()
+        self._add_text()
+        self._add_keys()
+        self._add_sliders()
+        self._update_status()
+
+    # -- building the window -------------------------------------------------
+
+    def _add_text(self):
+        # Text in normalized viewport coordinates at a fixed font size: it
+        # stays in its corner and readable at any window size (a corner
+        # annotation shrank its text as the line grew).
+        self.status = self.plotter.add_text(
+            "", position=(0.01, 0.985), viewport=True, font_size=7, name="status"
+        )
+        self.status.GetTextProperty().SetVerticalJustificationToTop()
+        self.help = self.plotter.add_text(
+            HELP, position=(0.01, 0.01), viewport=True, font_size=6, name="help"
+        )
+
+    def _add_keys(self):
+        iren = self.plotter.iren
+        iren.clear_key_event_callbacks()  # PyVista's own (b, v, C, +, -, Up, Down, q)
+        actions = {
+            "space": self.toggle_pause,
+            "n": self.single_frame,
+            "b": self.restart,
+            "i": self.cycle_integrator,
+            "bracketleft": lambda: self.scale_step(0.5),
+            "bracketright": lambda: self.scale_step(2.0),
+            "a": self.automatic_step,
+            "w": self.toggle_wind,
+            "k": self.screenshot,
+            "u": self.unpin_extras,
+            "q": self.quit,
+        }
+        assert actions.keys() == KEYS.keys()
+        for key, action in actions.items():
             self.plotter.add_key_event(key, action)
-        self._stiffness = 1.0  # the slider calls back once as it is made
-        self.plotter.add_slider_widget(
+
+    def _add_sliders(self):
+        # Right-hand column in normalized display coordinates.
+        self._stiffness = 1.0
+        self.stiffness_slider = self.plotter.add_slider_widget(
             self._set_stiffness,
             rng=[0.1, 10.0],
             value=1.0,
             title="stiffness x",
-            pointa=(0.7, 0.92),
-            pointb=(0.97, 0.92),
+            pointa=(0.76, 0.74),
+            pointb=(0.98, 0.74),
             style="modern",
             fmt="%.2f",
+            title_height=0.025,
+            slider_width=0.02,
+            tube_width=0.005,
         )
-        self._wind = sim.scene.wind or DEFAULT_WIND  # what "w" turns on
+        self._wind = self.sim.scene.wind or DEFAULT_WIND  # what "w" turns on
         speed = math.hypot(*self._wind.velocity)
         self._wind_direction = (
             tuple(c / speed for c in self._wind.velocity) if speed else (0.0, 1.0, 0.0)
         )
-        self.plotter.add_slider_widget(
+        self.wind_slider = self.plotter.add_slider_widget(
             self._set_wind_speed,
             rng=[0.0, 20.0],
             value=speed,
             title="wind m/s",
-            pointa=(0.7, 0.8),
-            pointb=(0.97, 0.8),
+            pointa=(0.76, 0.62),
+            pointb=(0.98, 0.62),
             style="modern",
             fmt="%.1f",
+            title_height=0.025,
+            slider_width=0.02,
+            tube_width=0.005,
         )
-        self._update_status()
+        self._show_wind_slider(self.sim.scene.wind is not None)
+
+    def _show_wind_slider(self, on: bool) -> None:
+        (self.wind_slider.On if on else self.wind_slider.Off)()
+
+    def _add_handles(self):
+        """The grabbed point, the line from it to the cursor and the hover
+        marker, drawn in a renderer layer above the scene (never hidden by
+        cloth in front of them) that shares its camera."""
+        import pyvista as pv
+        from vtkmodules.vtkRenderingCore import vtkRenderer
+
+        window = self.plotter.render_window
+        main = self.plotter.renderer
+        self.overlay = vtkRenderer()
+        self.overlay.SetLayer(1)
+        self.overlay.InteractiveOff()  # the mouse and the camera belong to the scene's
+        self.overlay.SetActiveCamera(main.GetActiveCamera())
+        window.SetNumberOfLayers(2)
+        window.AddRenderer(self.overlay)
+        self.handle = pv.PolyData(np.zeros((1, 3)))
+        self.hover = pv.PolyData(np.zeros((1, 3)))
+        self.leash = pv.Line((0, 0, 0), (0, 0, 0))
+        actors = []
+        for mesh, color, size in (
+            (self.handle, "#e8590c", 16),
+            (self.hover, "#1c7ed6", 12),
+            (self.leash, "#e8590c", 3),
+        ):
+            actor = pv.Actor(mapper=pv.DataSetMapper(mesh))
+            actor.prop.color = color
+            actor.prop.point_size = size
+            actor.prop.line_width = size
+            actor.prop.render_points_as_spheres = True
+            actor.visibility = False
+            self.overlay.AddActor(actor)
+            actors.append(actor)
+        self.handle_actor, self.hover_actor, self.leash_actor = actors
+
+    # -- requests to the physics thread -----------------------------------
+
+    @property
+    def paused(self) -> bool:
+        return self.physics.paused
+
+    def request(self, change, *args):
+        """Run ``change(*args)`` on the physics thread after what is queued;
+        errors it raises (a refused step, a divergence) show on screen."""
+        future = self.physics.request(change, *args)
+        self._requests.append(future)
+        return future
+
+    def wait(self) -> None:
+        """Block until the physics thread has run every request so far
+        (tests, benchmarks and closing use this; the window never does)."""
+        self.physics.wait()
+        self._collect()
+
+    def _collect(self) -> None:
+        """Errors of finished requests, and a divergence, onto the screen."""
+        pending = []
+        for future in self._requests:
+            if not future.done():
+                pending.append(future)
+                continue
+            error = future.exception()
+            if isinstance(error, SceneError):
+                self.message = f"refused: {error}"
+            elif error is not None and not isinstance(error, DivergenceError):
+                self.message = f"error: {type(error).__name__}: {error}"
+        self._requests = pending
+        if self.physics.diverged:
+            self.message, self.physics.diverged = self.physics.diverged, None
 
     # -- the frame loop --------------------------------------------------------
 
     def frame(self, *_):
-        """Advance one frame (called by the timer) and redraw."""
-        now = time.perf_counter()
-        if self._last_frame is not None:
-            self.frame_ms = 0.8 * self.frame_ms + 0.2 * 1e3 * (now - self._last_frame)
-        self._last_frame = now
-        if not self.paused:
-            self._guarded(self._advance, self.speed / self.fps)
+        """One frame (the timer calls it): show what the physics thread has
+        reached, and any message."""
+        start = time.perf_counter()
+        self.frame_times.append(start)
+        self._collect()
+        self.draw()
+        if self._in_event_loop:
+            # VTK's event loop holds Python's GIL while it waits for events,
+            # so the physics thread runs only while Python code does: give
+            # it the rest of the frame here (measured: without this the
+            # physics thread stalled in a real window). Mouse and key
+            # events queue meanwhile and are handled before the next frame.
+            rest = start + 1.0 / self.fps - 0.004 - time.perf_counter()
+            if rest > 0:
+                time.sleep(rest)
+
+    def draw(self) -> None:
+        """Copy the latest state into the meshes and render."""
         self.view.update()
+        self._update_handles()
         self._update_status()
         start = time.perf_counter()
         self.plotter.render()
         drawn = 1e3 * (time.perf_counter() - start)
         self.render_ms = drawn if not self.render_ms else 0.8 * self.render_ms + 0.2 * drawn
-        # Physics gets what drawing leaves of the frame (at least a fifth).
-        period = 1.0 / self.fps
-        self.budget = min(
-            self.physics_share * period, max(0.2 * period, period - 1.1e-3 * self.render_ms)
-        )
 
-    def _advance(self, seconds: float):
-        start = time.perf_counter()
-        self.sim.advance(seconds)
-        spent = time.perf_counter() - start
-        self.physics_ms = 1e3 * spent
-        # Slow down gracefully: aim the next frame's simulated time at the
-        # physics budget, never above real time, never more than 2x change.
-        if spent > 0:
-            target = self.speed * self.budget / spent
-            self.speed = min(1.0, max(0.5 * self.speed, min(2.0 * self.speed, target)))
+    @property
+    def fps_measured(self) -> float | None:
+        """Frames drawn per wall second over the last 30 frames."""
+        if len(self.frame_times) < 2:
+            return None
+        span = self.frame_times[-1] - self.frame_times[0]
+        return (len(self.frame_times) - 1) / span if span > 0 else None
+
+    @property
+    def real_time_fraction(self) -> float | None:
+        """Simulated seconds per wall second over the last second, measured."""
+        return None if self.paused else self.physics.meter.fraction
 
     def _update_status(self):
-        fps = 1e3 / self.frame_ms if self.frame_ms else 0.0
-        slow = (
-            "" if self.speed > 0.99 else f"  SLOW MOTION x{self.speed:.2f} (physics cannot keep up)"
-        )
-        state = "PAUSED  " if self.paused else ""
+        fps = self.fps_measured
+        fraction = self.real_time_fraction
+        pace = "" if fraction is None else f"   x{fraction:.2f} of real time"
+        slow = "   SLOW MOTION" if fraction is not None and fraction < 0.95 else ""
+        state = "PAUSED   " if self.paused else ""
         wind = self.sim.scene.wind
         blowing = "" if wind is None else f"   wind {math.hypot(*wind.velocity):.1f} m/s"
+        started = self.physics.chunk_started
+        running = 0.0 if started is None else time.perf_counter() - started
+        busy = f"   (a step running for {running:.1f} s)" if running > 2.0 / self.fps else ""
         text = (
-            f"{state}t = {self.sim.time:6.2f} s   {fps:4.1f} fps   "
-            f"physics {self.physics_ms:5.1f} ms   draw {self.render_ms:5.1f} ms"
-            f"   {self.sim.integrator.name}, dt {self.sim.dt:.2g} s{blowing}{slow}"
+            f"{state}t = {self.sim.time:6.2f} s{pace}{slow}{busy}\n"
+            f"{'' if fps is None else f'{fps:4.1f} fps   '}physics {self.physics.chunk_ms:5.1f} ms"
+            f" per chunk   draw {self.render_ms:5.1f} ms\n"
+            f"{self.sim.integrator.name}, dt {self.sim.dt:.3g} s ({self.sim.dt_source}){blowing}"
         )
         if self.message:
             text += "\n" + self.message
-        self.status.SetText(2, text)
+        self.status.SetInput(text)
+
+    def _update_handles(self):
+        k = self.style.grabbed
+        drag = self.physics.drag
+        grabbing = k is not None and drag is not None
+        self.handle_actor.visibility = grabbing
+        self.leash_actor.visibility = grabbing
+        if grabbing:
+            point = np.array(self.sim.state.x[k])
+            self.handle.points = point[None]
+            self.leash.points = np.array([point, drag[1].cursor])
+        self.hover_actor.visibility = self._hovered is not None and not grabbing
+        if self.hover_actor.visibility:
+            self.hover.points = np.array(self.sim.state.x[self._hovered])[None]
+
+    # -- the mouse -----------------------------------------------------------
+
+    def _grab(self, k: int) -> None:
+        path = DragPath(self.sim.state.x[k], time.perf_counter(), self.sim.time)
+        self.request(self.sim.pin, k)
+        self.physics.drag = (k, path)
+
+    def _drag_to(self, point) -> None:
+        drag = self.physics.drag
+        if drag is not None:
+            drag[1].add(point, time.perf_counter())
+
+    def _release(self, keep: bool) -> None:
+        """Let go; a point left pinned still finishes the cursor's path in
+        cloth time (in a paused window, all of it after the pause)."""
+        if not keep:
+            self.physics.drag = None
+            self.request(self.sim.unpin, self.style.grabbed)
+
+    def _hover(self, k) -> None:
+        self._hovered = k
 
     # -- keys and widgets ----------------------------------------------------
 
     def toggle_pause(self):
-        self.paused = not self.paused
-        self._update_status()
+        self.physics.paused = not self.physics.paused
+        self.physics.meter.restart()
+        if not self.paused and self.message.startswith("DIVERGED"):
+            self.message = ""
 
-    def _guarded(self, advance, seconds: float) -> None:
-        """Advance; a divergence pauses with a message instead of raising
-        out of a VTK callback (the state is the last good step)."""
-        try:
-            advance(seconds)
-        except DivergenceError as error:
-            self.paused = True
-            self.message = f"DIVERGED - press b to restart. {error}"
+    def single_frame(self):
+        """Pause, then one frame (1/fps) of cloth time."""
+        self.physics.paused = True
 
-    def single_step(self):
-        self.paused = True
-        self._guarded(self.sim.advance, 1.0 / self.fps)
-        self.view.update()
-        self._update_status()
+        def one_frame():
+            self.physics.run_chunk(max(1, round(1.0 / (self.fps * self.sim.dt))))
+
+        self.request(one_frame)
 
     def restart(self):
         self.style.grabbed = None  # a point held by the mouse is released too
-        self.sim.reset()
-        if self.message:  # restarting after a divergence runs again
-            self.paused = False
+        self.physics.drag = None
+        if self.message.startswith("DIVERGED"):  # restarting after a divergence runs again
+            self.physics.paused = False
         self.message = ""
-        self.view.update()
-        self._update_status()
+        self.request(self.sim.reset)
+        self.physics.forget_pace()
 
     def toggle_wind(self):
         """Turn the wind off, or back on at the slider's speed."""
-        self.sim.set_wind(None if self.sim.scene.wind is not None else self._wind)
-        self._update_status()
+        blowing = self.sim.scene.wind is not None
+        self._show_wind_slider(not blowing)
+        self.request(self.sim.set_wind, None if blowing else self._wind)
 
     def cycle_integrator(self):
+        """The next integrator, at its own automatic step (1/60 s for the
+        implicit ones, half the stable step for explicit ones)."""
         names = sorted(INTEGRATORS)
         following = names[(names.index(self.sim.integrator.name) + 1) % len(names)]
-        self.sim.set_integrator(following)
-        self._update_status()
 
-    def screenshot(self):
-        self._shots += 1
-        self.plotter.screenshot(f"pvcloth_{self._shots:03d}.png")
+        def switch():
+            self.sim.set_integrator(following)
+            self.sim.set_step(None)
+            self.physics.forget_pace()
+
+        self.request(switch)
+
+    def scale_step(self, factor: float) -> None:
+        """Halve or double the step (refused above the stable share)."""
+        self.message = ""
+
+        def rescale():
+            self.sim.set_step(self.sim.dt * factor)
+            self.physics.forget_pace()
+
+        self.request(rescale)
+
+    def automatic_step(self) -> None:
+        """The step ``solver.dt`` left out would give."""
+        self.message = ""
+
+        def automatic():
+            self.sim.set_step(None)
+            self.physics.forget_pace()
+
+        self.request(automatic)
+
+    def screenshot(self) -> Path:
+        path = next_screenshot_path(self.shot_folder, f"pvcloth_{self.sim.scene.name}")
+        self.plotter.screenshot(str(path))
+        self.message = f"screenshot: {path}"
+        print(f"pvcloth: screenshot written to {path}", flush=True)
+        return path
 
     def unpin_extras(self):
-        self.sim.restore_scene_pins()
-        self.view.update()
+        self.request(self.sim.restore_scene_pins)
+
+    def quit(self):
+        self.plotter.iren.terminate_app()
 
     def _set_stiffness(self, value):
-        self.sim.scale_stiffness(value / self._stiffness)
+        factor = value / self._stiffness
         self._stiffness = value
+        if factor != 1.0:
+
+            def rescale():
+                self.sim.scale_stiffness(factor)
+                self.physics.forget_pace()
+
+            self.request(rescale)
 
     def _set_wind_speed(self, value):
         """Keep the wind's direction, change its speed (applied now if it blows)."""
         velocity = tuple(value * c for c in self._wind_direction)
         self._wind = dataclasses.replace(self._wind, velocity=velocity)
         if self.sim.scene.wind is not None:
-            self.sim.set_wind(self._wind)
+            self.request(self.sim.set_wind, self._wind)
 
     def run(self, max_frames: int = 10**9):
         """Open the window and animate until it is closed (or ``q``)."""
         self.plotter.add_timer_event(
             max_steps=max_frames, duration=int(1000 / self.fps), callback=self.frame
         )
-        self.plotter.show()
+        self.physics.start()
+        self._in_event_loop = True
+        try:
+            self.plotter.show()
+        finally:
+            self.close()
+
+    def close(self) -> None:
+        """Stop the physics thread (after its current chunk) and the window."""
+        self.physics.stop()
+        self.plotter.close()

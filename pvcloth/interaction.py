@@ -8,8 +8,12 @@ While dragging, the point follows the mouse on the plane through it parallel
 to the view plane, as a moving pin inside the solver, so every integrator
 respects it. Releasing lets it go; releasing with Shift leaves it pinned.
 
-No physics here: the style only calls ``Simulation.pin``, ``move_pin`` and
-``unpin``.
+The drag happens in the cloth's time: :class:`DragPath` records the cursor's
+path against the wall clock and replays it on the simulation's clock, so in
+slow motion the pin moves as fast in cloth time as the hand moved in real
+time (played at wall speed, a 240 px drag in slow motion had thrown a cloth
+25 m). No physics here: the style reports grabs, moves and releases to
+callables (by default ``Simulation.pin``, ``move_pin`` and ``unpin``).
 """
 
 from __future__ import annotations
@@ -19,6 +23,69 @@ from vtkmodules.vtkInteractionStyle import vtkInteractorStyleTrackballCamera
 
 #: How close (pixels) a press must be to a cloth point to grab it.
 PICK_RADIUS_PX = 12.0
+
+#: Fastest a dragged point moves, in metres per second of cloth time: a
+#: flick of the mouse does not become a pin at tens of metres per second.
+MAX_DRAG_SPEED = 5.0
+
+
+class DragPath:
+    """The cursor's path while a point is dragged, replayed on the cloth's
+    clock: the pin is where the cursor was ``t - t0`` wall seconds after
+    the grab when the cloth is ``t - t0`` simulated seconds after it.
+
+    Parameters
+    ----------
+    point : ndarray, shape (3,)
+        Where the grabbed point was (m).
+    wall : float
+        Wall-clock time of the grab (s).
+    sim_time : float
+        Simulated time of the grab (s).
+
+    Examples
+    --------
+    A 0.3 m drag over one wall second, replayed at a fifth of real time:
+
+    >>> import numpy as np
+    >>> path = DragPath(np.zeros(3), wall=100.0, sim_time=2.0)
+    >>> path.add(np.array([0.3, 0.0, 0.0]), wall=101.0)
+    >>> path.at(2.2)  # 0.2 s of cloth time after the grab
+    array([0.06, 0.  , 0.  ])
+    >>> path.at(9.0)  # after the end: where the cursor stopped
+    array([0.3, 0. , 0. ])
+    """
+
+    def __init__(self, point: np.ndarray, wall: float, sim_time: float):
+        self.walls = [0.0]
+        self.points = [np.asarray(point, dtype=float)]
+        self.wall0, self.sim0 = wall, sim_time
+
+    def add(self, point: np.ndarray, wall: float) -> None:
+        """The cursor is at ``point`` (m) at wall-clock time ``wall`` (s)."""
+        self.walls.append(max(wall - self.wall0, self.walls[-1]))
+        self.points.append(np.asarray(point, dtype=float))
+
+    @property
+    def cursor(self) -> np.ndarray:
+        """The latest cursor point (m)."""
+        return self.points[-1]
+
+    def at(self, sim_time: float) -> np.ndarray:
+        """Where the path is ``sim_time - sim0`` seconds after the grab."""
+        elapsed = sim_time - self.sim0
+        points = np.array(self.points)
+        return np.array([np.interp(elapsed, self.walls, points[:, d]) for d in range(3)])
+
+    def target(self, pin: np.ndarray, sim_time: float, seconds: float) -> np.ndarray:
+        """Where a pin now at ``pin`` should be after ``seconds`` more of
+        cloth time ending at ``sim_time``: on the path, at most
+        :data:`MAX_DRAG_SPEED` away."""
+        goal = self.at(sim_time)
+        move = goal - pin
+        distance = float(np.linalg.norm(move))
+        reach = MAX_DRAG_SPEED * seconds
+        return goal if distance <= reach else pin + move * (reach / distance)
 
 
 def world_to_display(renderer, points: np.ndarray) -> np.ndarray:
@@ -51,21 +118,37 @@ class ClothDragStyle(vtkInteractorStyleTrackballCamera):
     Parameters
     ----------
     sim : Simulation
-        The simulation whose points are dragged.
-    on_change : callable, optional
-        Called after each grab, move or release (e.g. to re-render).
+        The simulation whose points are dragged (read for picking).
+    on_grab, on_move, on_release : callable, optional
+        Called with the grabbed point's index, with the cursor's world point
+        (m) and with ``keep`` (leave the point pinned); by default they pin,
+        move and unpin the point in ``sim`` at once.
+    on_hover : callable, optional
+        Called with the index a press would grab (or ``None``) as the mouse
+        moves without a grab.
+
+    VTK's default character handlers (``w`` wireframe, ``s`` surface, ``r``
+    reset, ``e``/``q`` exit, ``f`` fly to, ``p`` pick, ``3`` stereo, ...) are
+    off: a real key press sends a character event too, and ``w`` toggled
+    the wind and the wireframe at once.
     """
 
-    def __init__(self, sim, on_change=None):
+    def __init__(self, sim, on_grab=None, on_move=None, on_release=None, on_hover=None):
         super().__init__()
         self.sim = sim
-        self.on_change = on_change
+        self.on_grab = on_grab or sim.pin
+        self.on_move = on_move or (lambda point: sim.move_pin(self.grabbed, point))
+        self.on_release = on_release or self._unpin_unless_kept
+        self.on_hover = on_hover
         self.grabbed: int | None = None
         self.was_pinned = False
         self._depth = 0.0
         self.AddObserver("LeftButtonPressEvent", self._press)
         self.AddObserver("MouseMoveEvent", self._move)
         self.AddObserver("LeftButtonReleaseEvent", self._release)
+        # An observer replaces the style's own OnChar (vtkInteractorStyle
+        # calls observers instead of its handler when there are any).
+        self.AddObserver("CharEvent", lambda obj, event: None)
 
     def _renderer(self):
         x, y = self.GetInteractor().GetEventPosition()
@@ -92,27 +175,25 @@ class ClothDragStyle(vtkInteractorStyleTrackballCamera):
         self.grabbed = k
         self.was_pinned = bool(self.sim.control.pinned[k])
         self._depth = world_to_display(self._renderer(), self.sim.positions[k : k + 1])[0, 2]
-        self.sim.pin(k)
-        self._changed()
+        self.on_grab(k)
 
     def _move(self, obj, event):
+        x, y = self.GetInteractor().GetEventPosition()
         if self.grabbed is None:
+            if self.on_hover is not None:
+                self.on_hover(self.nearest_point(x, y))
             self.OnMouseMove()
             return
-        x, y = self.GetInteractor().GetEventPosition()
-        self.sim.move_pin(self.grabbed, display_to_world(self._renderer(), x, y, self._depth))
-        self._changed()
+        self.on_move(display_to_world(self._renderer(), x, y, self._depth))
 
     def _release(self, obj, event):
         if self.grabbed is None:
             self.OnLeftButtonUp()
             return
-        keep = self.GetInteractor().GetShiftKey() or self.was_pinned
+        keep = bool(self.GetInteractor().GetShiftKey()) or self.was_pinned
+        self.on_release(keep)
+        self.grabbed = None
+
+    def _unpin_unless_kept(self, keep: bool) -> None:
         if not keep:
             self.sim.unpin(self.grabbed)
-        self.grabbed = None
-        self._changed()
-
-    def _changed(self):
-        if self.on_change is not None:
-            self.on_change()

@@ -94,12 +94,14 @@ def update_cloth_mesh(grid: pv.StructuredGrid, sim) -> None:
     """
     from .grid import point_stretch
 
-    grid.points = sim.positions
-    velocity = np.array(sim.velocities)
+    state = sim.state  # one state throughout, should a physics thread replace it
+    positions = state.x.copy()
+    grid.points = positions
+    velocity = state.v.copy()
     fields = {
         "velocity": velocity,
         "speed": np.linalg.norm(velocity, axis=1),
-        "stretch": point_stretch(sim.positions, sim.model.rest_positions, sim.model.shape),
+        "stretch": point_stretch(positions, sim.model.rest_positions, sim.model.shape),
         "pinned": sim.control.pinned.astype(np.uint8),
     }
     for name, values in fields.items():
@@ -171,6 +173,10 @@ class ClothView:
         Where to draw.
     show_pins : bool
         Draw pinned points as small spheres.
+    own_grid : bool
+        Draw a grid of the view's own instead of ``sim.mesh`` (which
+        ``Simulation.advance`` refreshes): for the window, whose physics runs
+        on another thread while VTK, on the main one, reads the grid.
 
     Examples
     --------
@@ -182,10 +188,12 @@ class ClothView:
     >>> sim.advance(1 / 30); view.update()
     """
 
-    def __init__(self, sim, plotter: pv.Plotter, *, show_pins: bool = True):
+    def __init__(self, sim, plotter: pv.Plotter, *, show_pins: bool = True, own_grid: bool = False):
         self.sim = sim
         self.plotter = plotter
-        self.grid = sim.mesh  # the simulation's own grid, point data and all
+        self.own_grid = own_grid
+        # The simulation's own grid, point data and all, unless asked not to.
+        self.grid = cloth_mesh(sim) if own_grid else sim.mesh
         plotter.set_background(BACK_COLOR, top="white")
         self.actor = plotter.add_mesh(
             self.grid,
@@ -229,7 +237,10 @@ class ClothView:
 
     def update(self) -> None:
         """Copy the simulation's current state into the drawn meshes."""
-        self.sim.update_mesh()
+        if self.own_grid:
+            update_cloth_mesh(self.grid, self.sim)
+        else:
+            self.sim.update_mesh()
         for obstacle, actor in zip(self.sim.model.obstacles, self.obstacle_actors, strict=True):
             if obstacle.path.size:
                 actor.user_matrix = obstacle_matrix(obstacle, self.sim.time)

@@ -123,16 +123,25 @@ def test_the_window_opens_takes_keys_and_a_drag_and_quits(workdir, x_display):
             _xdotool(x_display, "windowfocus", "--sync", window, "key", name)
 
         def screenshot(n: int) -> Path:
-            key("k")  # the window's own screenshot key: pvcloth_NNN.png in its folder
-            shot = workdir / f"pvcloth_{n:03d}.png"
+            key("k")  # the window's own screenshot key: pvcloth_SCENE_NNN.png in its folder
+            shot = workdir / f"pvcloth_hanging_{n:03d}.png"
             _wait_for(lambda: shot.exists() and shot.stat().st_size > 0, 30, shot.name)
             time.sleep(0.3)  # let the write finish
             return shot
 
+        (workdir / "pvcloth_hanging_001.png").write_bytes(b"an earlier shot")
         time.sleep(3)  # let the cloth fall
+        # Keys VTK would act on by default (w: wireframe, s: surface, 3:
+        # stereo, f: fly to, r: reset camera, e: exit) must do nothing here
+        # but what the window documents: w toggles the wind, twice.
+        for name in ("w", "w", "s", "3", "f", "r", "e", "p", "j", "t"):
+            key(name)
+        time.sleep(0.5)
+        assert app.poll() is None, "a default key closed the window"
         key("space")  # pause, so the cloth stays where the screenshot shows it
         time.sleep(0.5)
-        before = _cloth_pixels(screenshot(1))
+        before = _cloth_pixels(screenshot(2))
+        assert (workdir / "pvcloth_hanging_001.png").read_bytes() == b"an earlier shot"
         assert before.mean() > 0.02  # the cloth is on screen
         rows, cols = np.nonzero(before)
         # Grab the cloth just above its lowest pixel, drag it 250 px right, to
@@ -150,7 +159,7 @@ def test_the_window_opens_takes_keys_and_a_drag_and_quits(workdir, x_display):
         _xdotool(x_display, "keydown", "shift", "mouseup", "1", "keyup", "shift")
         key("space")  # resume
         time.sleep(2.0)
-        after = _cloth_pixels(screenshot(2))
+        after = _cloth_pixels(screenshot(3))
         assert after[target].any(), "the cloth did not follow the mouse and stay pinned there"
         key("q")
         out, err = app.communicate(timeout=60)
@@ -160,3 +169,5 @@ def test_the_window_opens_takes_keys_and_a_drag_and_quits(workdir, x_display):
             app.communicate()
     assert app.returncode == 0, err
     assert err == ""
+    for n in (2, 3):  # each shot's path was printed
+        assert f"pvcloth_hanging_{n:03d}.png" in out

@@ -38,8 +38,14 @@ class Integrator(ABC):
     description: str = ""
 
     @abstractmethod
-    def step(self, model, state, control, dt: float):
-        """Return the :class:`~pvcloth.state.State` one step ``dt`` later."""
+    def step(self, model, state, control, dt: float, out=None):
+        """Return the :class:`~pvcloth.state.State` one step ``dt`` later.
+
+        ``out``, if given, is a state of the same shape whose arrays the
+        integrator may overwrite and return (the simulation keeps a spare
+        one so that big grids do not get fresh memory at every step); an
+        integrator may also ignore it and return new arrays. ``state`` is
+        never changed."""
 
     def stable_dt(self, model, state, control) -> float:
         """Largest stable time step near ``state``: this integrator's own step
@@ -62,6 +68,15 @@ class Integrator(ABC):
         return f"{type(self).__name__}()"
 
 
+def reuse_or_allocate(out, state):
+    """``out`` if there is one, else a new state shaped like ``state``."""
+    from ..state import State
+
+    if out is None:
+        return State(np.empty_like(state.x), np.empty_like(state.v), state.t)
+    return out
+
+
 class _ModalOscillator:
     """A model of one unit-mass point whose every axis is a damped oscillator
     ``x'' = -omega^2 x - 2 alpha x'``: the stiffest mode, seen by an integrator."""
@@ -72,8 +87,12 @@ class _ModalOscillator:
     def __init__(self, omega: float, alpha: float):
         self.stiffness, self.damping = omega * omega, 2.0 * alpha
 
-    def compute_forces(self, x, v):
-        return -self.stiffness * x - self.damping * v
+    def compute_forces(self, x, v, out=None):
+        f = -self.stiffness * x - self.damping * v
+        if out is None:
+            return f
+        out[...] = f
+        return out
 
     def jacobians(self, x, v):
         return -self.stiffness * sp.identity(3, format="csr"), -self.damping * sp.identity(

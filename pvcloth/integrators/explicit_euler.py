@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-from ..state import State
-from .base import Integrator, register
+import numpy as np
+
+from .base import Integrator, register, reuse_or_allocate
 
 
 @register
@@ -19,9 +20,13 @@ class ExplicitEuler(Integrator):
     order = 1
     description = "forward Euler; 1st order, gains energy, needs damping"
 
-    def step(self, model, state, control, dt):
+    def step(self, model, state, control, dt, out=None):
+        new = reuse_or_allocate(out, state)
         a = model.compute_forces(state.x, state.v)
         a *= control.inv_mass[:, None]
-        x = state.x + dt * state.v
-        v = state.v + dt * a
-        return State(x, v, state.t + dt)
+        np.multiply(state.v, dt, out=new.x)
+        new.x += state.x
+        np.multiply(a, dt, out=new.v)
+        new.v += state.v
+        new.t, new.checked = state.t + dt, None
+        return new

@@ -81,7 +81,7 @@ class FastMassSpring(Integrator):
 
     # -- a step ---------------------------------------------------------------------
 
-    def step(self, model, state, control, dt):
+    def step(self, model, state, control, dt, out=None):
         from ..forces import Springs
 
         self._prepare(model, control, dt)

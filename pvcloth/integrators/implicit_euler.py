@@ -49,7 +49,7 @@ class ImplicitEuler(Integrator):
     def set_state(self, state):
         self._last_dv = state.get("last_dv")
 
-    def step(self, model, state, control, dt):
+    def step(self, model, state, control, dt, out=None):
         x, v = state.x, state.v
         f = model.compute_forces(x, v).ravel()
         dfdx, dfdv = model.jacobians(x, v)

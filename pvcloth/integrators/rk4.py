@@ -19,7 +19,7 @@ class RungeKutta4(Integrator):
     order = 4
     description = "classical Runge-Kutta; 4th order, 4 force evaluations"
 
-    def step(self, model, state, control, dt):
+    def step(self, model, state, control, dt, out=None):
         inv_mass = control.inv_mass[:, None]
 
         def acceleration(x, v):

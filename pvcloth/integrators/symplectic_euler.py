@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..state import State
-from .base import Integrator, register
+from .base import Integrator, register, reuse_or_allocate
 
 
 @register
@@ -23,16 +22,26 @@ class SymplecticEuler(Integrator):
     order = 1
     description = "semi-implicit Euler; 1st order, bounded energy error"
 
-    def step(self, model, state, control, dt):
+    def __init__(self):
+        self._forces = None  # reused force buffer: (N, 3) newtons
+
+    def step(self, model, state, control, dt, out=None):
+        if self._forces is None or self._forces.shape != state.x.shape:
+            self._forces = np.empty_like(state.x)
+        f = model.compute_forces(state.x, state.v, out=self._forces)
+        new = reuse_or_allocate(out, state)
         if getattr(model, "compiled", False):
             from ..kernels import kick_drift
 
-            f = model.compute_forces(state.x, state.v)
-            x, v = np.empty_like(state.x), np.empty_like(state.v)
-            checked = kick_drift(state.x, state.v, f, control.inv_mass, dt, x, v, model.shape)
-            return State(x, v, state.t + dt, checked)
-        a = model.compute_forces(state.x, state.v)
-        a *= control.inv_mass[:, None]
-        v = state.v + dt * a
-        x = state.x + dt * v
-        return State(x, v, state.t + dt)
+            new.checked = kick_drift(
+                state.x, state.v, f, control.inv_mass, dt, new.x, new.v, model.shape
+            )
+        else:
+            f *= control.inv_mass[:, None]
+            np.multiply(f, dt, out=new.v)
+            new.v += state.v
+            np.multiply(new.v, dt, out=new.x)
+            new.x += state.x
+            new.checked = None
+        new.t = state.t + dt
+        return new

@@ -23,7 +23,7 @@ class VelocityVerlet(Integrator):
     order = 2
     description = "velocity Verlet; 2nd order, symplectic, 2 force evaluations"
 
-    def step(self, model, state, control, dt):
+    def step(self, model, state, control, dt, out=None):
         inv_mass = control.inv_mass[:, None]
         kick = 0.5 * dt * inv_mass * model.compute_forces(state.x, state.v)
         half = state.v + kick
