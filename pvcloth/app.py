@@ -37,6 +37,10 @@ from .window_physics import PhysicsThread
 #: hangs in the x-z plane, away from the default camera.
 DEFAULT_WIND = WindSpec(velocity=(0.0, 6.0, 0.0))
 
+#: Period of the event loop's timer (ms): frames are drawn on the ticks
+#: where one is due (see :meth:`ClothApp.tick`).
+TICK_MS = 5
+
 #: Keys the window answers, by VTK key symbol, with what they do. No other
 #: key acts (VTK's and PyVista's default handlers are removed).
 KEYS = {
@@ -157,7 +161,7 @@ class ClothApp:
         self.frame_times: collections.deque[float] = collections.deque(maxlen=31)
         self._requests = []  # Futures of requests not yet looked at
         self._hovered = None
-        self._in_event_loop = False
+        self._last_draw = 0.0
         self.physics = PhysicsThread(sim, chunk_seconds=physics_share / fps)
         # No multisampling: under software GL (llvmpipe) 4x MSAA triples the
         # cost of a frame (benchmarks/results/interactive_fps.md).
@@ -329,19 +333,9 @@ class ClothApp:
     def frame(self, *_):
         """One frame (the timer calls it): show what the physics thread has
         reached, and any message."""
-        start = time.perf_counter()
-        self.frame_times.append(start)
+        self.frame_times.append(time.perf_counter())
         self._collect()
         self.draw()
-        if self._in_event_loop:
-            # VTK's event loop holds Python's GIL while it waits for events,
-            # so the physics thread runs only while Python code does: give
-            # it the rest of the frame here (measured: without this the
-            # physics thread stalled in a real window). Mouse and key
-            # events queue meanwhile and are handled before the next frame.
-            rest = start + 1.0 / self.fps - 0.004 - time.perf_counter()
-            if rest > 0:
-                time.sleep(rest)
 
     def draw(self) -> None:
         """Copy the latest state into the meshes and render."""
@@ -519,13 +513,35 @@ class ClothApp:
         if self.sim.scene.wind is not None:
             self.request(self.sim.set_wind, self._wind)
 
+    def tick(self, *_):
+        """The event loop's timer, every :data:`TICK_MS`: a frame when one is
+        due, else a short sleep.
+
+        Why the sleeps: VTK's event loop holds Python's GIL while it waits
+        for events, so the physics thread runs only while Python does; one
+        timer per frame left it a few milliseconds per frame (measured: the
+        cloth barely moved in a real window). Sleeping releases the GIL, and
+        the loop still handles the mouse and keys between ticks."""
+        now = time.perf_counter()
+        if now - self._last_draw >= 1.0 / self.fps - 0.5e-3 * TICK_MS:
+            self._last_draw = now
+            self.frame()
+            self._frames_left -= 1
+            if self._frames_left <= 0:
+                self.quit()
+        else:
+            time.sleep(0.8e-3 * TICK_MS)
+
     def run(self, max_frames: int = 10**9):
-        """Open the window and animate until it is closed (or ``q``)."""
-        self.plotter.add_timer_event(
-            max_steps=max_frames, duration=int(1000 / self.fps), callback=self.frame
-        )
+        """Open the window and animate until it is closed (or ``q``, or
+        ``max_frames`` frames)."""
+        self._frames_left = max_frames
+        # VTK's own timer, not PyVista's add_timer_event: that one renders
+        # after every callback, which made each 5 ms tick a full redraw.
+        interactor = self.plotter.iren.interactor
+        interactor.AddObserver("TimerEvent", self.tick)
+        interactor.CreateRepeatingTimer(TICK_MS)
         self.physics.start()
-        self._in_event_loop = True
         try:
             self.plotter.show()
         finally:
