@@ -302,7 +302,21 @@ THREADED_ROWS = 64
 
 
 def _pick(builds, rows: int):
-    return builds[rows >= THREADED_ROWS]
+    # numba's thread count is per calling thread: a thread that asked for
+    # one (the window's physics, see use_threads) gets the serial build.
+    return builds[rows >= THREADED_ROWS and numba.get_num_threads() > 1]
+
+
+def use_threads(count: int) -> None:
+    """Let the kernels called from this thread use ``count`` threads (numba
+    keeps the number per calling thread); 1 selects the serial builds.
+
+    The window calls this from its physics thread with one thread fewer
+    than the machine's cores, because the drawing needs one: OpenMP threads
+    that wait at a barrier for a core busy drawing made a 64x64 step take
+    280 ms instead of 0.2 ms."""
+    if numba is not None:
+        numba.set_num_threads(max(1, min(count, numba.config.NUMBA_NUM_THREADS)))
 
 
 def spring_forces(plan: SpringPlan, x, v, f) -> None:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import collections
 import math
+import os
 import queue
 import threading
 import time
@@ -149,6 +150,10 @@ class PhysicsThread:
         self._requests.put(None)
 
     def _loop(self):
+        from .kernels import use_threads
+
+        # The drawing needs a core: leave it one (see use_threads).
+        use_threads((os.cpu_count() or 1) - 1)
         while not self._stop:
             self._run_requests(block=self.paused)
             if self.paused or self._stop:
