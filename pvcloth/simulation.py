@@ -31,9 +31,9 @@ MIN_STIFFNESS_SCALE, MAX_STIFFNESS_SCALE = 1e-6, 1e6
 #: Most steps one call may take: hours of wall time even for a tiny cloth.
 MAX_STEPS = 10**7
 #: Peak bytes per cloth point while a simulation is built: the stable-step
-#: estimate's sparse Jacobians dominate (8.6 kB at 256x256, falling with size,
+#: estimate's sparse Jacobians dominate (8.7 kB at 256x256, falling with size,
 #: from `python benchmarks/memory.py`; stepping needs a tenth of it).
-PEAK_BYTES_PER_POINT = 8600
+PEAK_BYTES_PER_POINT = 8700
 
 
 class Simulation:
