@@ -36,6 +36,14 @@ class Integrator(ABC):
     name: str = ""
     order: int = 1
     description: str = ""
+    _forces: np.ndarray | None = None  # reused (N, 3) force buffer, newtons
+
+    def forces(self, model, state) -> np.ndarray:
+        """The total force at ``state``, in a buffer this integrator reuses
+        from step to step (valid until its next call)."""
+        if self._forces is None or self._forces.shape != state.x.shape:
+            self._forces = np.empty_like(state.x)
+        return model.compute_forces(state.x, state.v, out=self._forces)
 
     @abstractmethod
     def step(self, model, state, control, dt: float, out=None):

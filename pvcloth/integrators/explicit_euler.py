@@ -22,7 +22,7 @@ class ExplicitEuler(Integrator):
 
     def step(self, model, state, control, dt, out=None):
         new = reuse_or_allocate(out, state)
-        a = model.compute_forces(state.x, state.v)
+        a = self.forces(model, state)
         a *= control.inv_mass[:, None]
         np.multiply(state.v, dt, out=new.x)
         new.x += state.x

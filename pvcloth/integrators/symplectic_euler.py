@@ -22,13 +22,8 @@ class SymplecticEuler(Integrator):
     order = 1
     description = "semi-implicit Euler; 1st order, bounded energy error"
 
-    def __init__(self):
-        self._forces = None  # reused force buffer: (N, 3) newtons
-
     def step(self, model, state, control, dt, out=None):
-        if self._forces is None or self._forces.shape != state.x.shape:
-            self._forces = np.empty_like(state.x)
-        f = model.compute_forces(state.x, state.v, out=self._forces)
+        f = self.forces(model, state)
         new = reuse_or_allocate(out, state)
         if getattr(model, "compiled", False):
             from ..kernels import kick_drift
