@@ -304,7 +304,33 @@ THREADED_ROWS = 64
 def _pick(builds, rows: int):
     # numba's thread count is per calling thread: a thread that asked for
     # one (the window's physics, see use_threads) gets the serial build.
-    return builds[rows >= THREADED_ROWS and numba.get_num_threads() > 1]
+    kernel = builds[rows >= THREADED_ROWS and numba.get_num_threads() > 1]
+    return kernel if kernel in _WARM else _Warming(kernel)
+
+
+#: Kernels that have been compiled or loaded from the disk cache.
+_WARM: set = set()
+
+
+class _Warming:
+    """A kernel's first call, with Ctrl-C and SIGTERM held until it returns.
+
+    The first call compiles (seconds, with a cold cache) or loads the
+    kernel, inside llvmlite's ctypes callbacks, which swallow an exception
+    that pvcloth's signal handler raises there: a SIGTERM at that moment
+    printed "Exception ignored ... Traceback" (seen in a fresh clone's
+    signal test)."""
+
+    def __init__(self, kernel):
+        self.kernel = kernel
+
+    def __call__(self, *args):
+        from .signals import deferred
+
+        with deferred():
+            result = self.kernel(*args)
+        _WARM.add(self.kernel)
+        return result
 
 
 def use_threads(count: int) -> None:
