@@ -67,7 +67,8 @@ def free_cloth(n=5, **kwargs) -> pvcloth.Simulation:
 
 
 _PROBE = (
-    "import pvcloth.view, pyvista as pv; pl = pv.Plotter(off_screen=True, window_size=(64, 64));"
+    "import pvcloth.visual.view, pyvista as pv;"
+    "pl = pv.Plotter(off_screen=True, window_size=(64, 64));"
     "pl.add_mesh(pv.Sphere()); assert pl.screenshot(return_img=True).shape == (64, 64, 3)"
 )
 

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 import pvcloth
-from pvcloth.kernels import threading_layer
+from pvcloth.physics.kernels import threading_layer
 
 HERE = Path(__file__).parent
 SCENE = HERE.parent / "data" / "scenes" / "hanging.toml"
@@ -48,7 +48,7 @@ def kernels_alone(sim):
     """The compiled calls of one symplectic Euler step and nothing else:
     ``Simulation.step()`` minus this is the Python around the kernels (pins,
     divergence guard, bookkeeping)."""
-    from pvcloth.kernels import kick_drift
+    from pvcloth.physics.kernels import kick_drift
 
     model, state, inv_mass = sim.model, sim.state.copy(), sim.control.inv_mass
     f, x, v = (np.empty_like(state.x) for _ in range(3))

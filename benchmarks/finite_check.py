@@ -27,7 +27,7 @@ import numpy as np
 from numba import prange
 from smoke import SMOKE
 
-from pvcloth import kernels
+from pvcloth.physics import kernels
 
 HERE = Path(__file__).parent
 SIZES = (8,) if SMOKE else (64, 128, 256)

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 import pvcloth
-from pvcloth.app import ClothApp
+from pvcloth.visual.window import ClothApp
 
 HERE = Path(__file__).parent
 WARM_UP = 1.0  # wall seconds before measuring (compilation, first chunks)

@@ -19,7 +19,7 @@ from pathlib import Path
 import pyvista
 
 import pvcloth
-from pvcloth.movie import render
+from pvcloth.visual.movie import render
 
 HERE = Path(__file__).parent
 SCENE = HERE.parent / "data" / "scenes" / "hanging.toml"

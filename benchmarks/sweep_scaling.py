@@ -21,7 +21,7 @@ from dask.distributed import Client, LocalCluster
 from smoke import SMOKE
 
 import pvcloth
-from pvcloth.sweep import parse_sets, run_sweep
+from pvcloth.studies.sweep import parse_sets, run_sweep
 
 HERE = Path(__file__).parent
 SETS = [

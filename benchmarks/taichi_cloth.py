@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 import taichi as ti
 
-from pvcloth.grid import SPRING_OFFSETS
+from pvcloth.physics.grid import SPRING_OFFSETS
 
 _STARTED: list = []
 

@@ -6,7 +6,7 @@ interaction, export, analysis. See ``docs/architecture.md``.
 
 from importlib import metadata as _metadata
 
-from .errors import (
+from pvcloth.errors import (
     CheckpointError,
     DisplayError,
     DivergenceError,
@@ -27,10 +27,13 @@ except _metadata.PackageNotFoundError:  # running from a source tree that was ne
 #: drawing library until asked, so ``pvcloth --help`` answers at once and a
 #: Ctrl-C during start-up reaches the command's own handler.
 _LAZY = {
-    **{name: ("integrators", name) for name in ("INTEGRATORS", "Integrator", "get_integrator")},
-    **{name: ("model", name) for name in ("Model", "build_model")},
     **{
-        name: ("scene", name)
+        name: ("physics.integrators", name)
+        for name in ("INTEGRATORS", "Integrator", "get_integrator")
+    },
+    **{name: ("physics.model", name) for name in ("Model", "build_model")},
+    **{
+        name: ("scene.spec", name)
         for name in (
             "ClothSpec",
             "ObstacleSpec",
@@ -43,12 +46,12 @@ _LAZY = {
             "load_scene",
         )
     },
-    "Simulation": ("simulation", "Simulation"),
-    **{name: ("state", name) for name in ("Control", "State")},
-    "render": ("movie", "render"),
-    "export": ("timeseries", "export"),
-    "save_checkpoint": ("checkpoint", "save_checkpoint"),
-    "load_checkpoint": ("checkpoint", "load_checkpoint"),
+    "Simulation": ("physics.simulation", "Simulation"),
+    **{name: ("physics.state", name) for name in ("Control", "State")},
+    "render": ("visual.movie", "render"),
+    "export": ("io.timeseries", "export"),
+    "save_checkpoint": ("io.checkpoint", "save_checkpoint"),
+    "load_checkpoint": ("io.checkpoint", "load_checkpoint"),
 }
 
 

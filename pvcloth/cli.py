@@ -6,8 +6,8 @@ import argparse
 import sys
 import time
 
-from .errors import PvclothError
-from .signals import Terminated, check, deferred, handled
+from pvcloth.errors import PvclothError
+from pvcloth.signals import Terminated, check, deferred, handled
 
 
 def _add_overrides(parser: argparse.ArgumentParser) -> None:
@@ -22,7 +22,7 @@ def _add_overrides(parser: argparse.ArgumentParser) -> None:
 
 
 def _simulation(args):
-    from .simulation import Simulation
+    from pvcloth.physics.simulation import Simulation
 
     return Simulation.from_file(
         args.scene, integrator=args.integrator, dt=args.dt, stability=args.stability
@@ -30,7 +30,7 @@ def _simulation(args):
 
 
 def cmd_info(args) -> None:
-    from .info import describe
+    from pvcloth.info import describe
 
     print(describe(_simulation(args)))
 
@@ -38,7 +38,7 @@ def cmd_info(args) -> None:
 def cmd_simulate(args) -> None:
     from tqdm import tqdm
 
-    from .validation import real
+    from pvcloth.scene.validation import real
 
     seconds = real("--seconds", args.seconds, minimum=0.0, exclusive=True)
     fps = real("--fps", args.fps, minimum=0.0, exclusive=True, maximum=1000.0)
@@ -64,7 +64,7 @@ def cmd_simulate(args) -> None:
 
 
 def cmd_render(args) -> None:
-    from .movie import parse_size, render
+    from pvcloth.visual.movie import parse_size, render
 
     sim = _simulation(args)
     stats = render(
@@ -84,10 +84,10 @@ def cmd_render(args) -> None:
 
 
 def cmd_run(args) -> None:
-    from .movie import parse_size
+    from pvcloth.visual.movie import parse_size
 
     with deferred():  # a signal inside VTK's module set-up crashed the process
-        from .app import ClothApp, check_display
+        from pvcloth.visual.window import ClothApp, check_display
     check_display()  # before building anything: VTK cannot say it has no screen
     sim = _simulation(args)
     with deferred():  # a signal inside VTK's module set-up crashed the process
@@ -96,7 +96,7 @@ def cmd_run(args) -> None:
 
 
 def cmd_export(args) -> None:
-    from .timeseries import export
+    from pvcloth.io.timeseries import export
 
     sim = _simulation(args)
     where = export(sim, args.output, frames=args.frames, fps=args.fps, progress=not args.quiet)
@@ -106,8 +106,8 @@ def cmd_export(args) -> None:
 def cmd_tradeoff(args) -> None:
     from pathlib import Path
 
-    from . import tradeoff
-    from .scene import load_scene
+    from pvcloth.scene.spec import load_scene
+    from pvcloth.studies import tradeoff
 
     scene = load_scene(args.scene)
     if args.resolution:
@@ -131,8 +131,8 @@ def cmd_tradeoff(args) -> None:
 def cmd_sweep(args) -> None:
     from pathlib import Path
 
-    from . import sweep
-    from .scene import load_scene
+    from pvcloth.scene.spec import load_scene
+    from pvcloth.studies import sweep
 
     scene = load_scene(args.scene)
     sets = sweep.parse_sets(args.set or [])
@@ -155,7 +155,7 @@ def cmd_sweep(args) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import __version__
+    from pvcloth import __version__
 
     parser = argparse.ArgumentParser(prog="pvcloth", description="Mass-spring cloth with PyVista.")
     parser.add_argument("--version", action="version", version=f"pvcloth {__version__}")

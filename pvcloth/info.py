@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from .simulation import STABLE_SHARE
+from pvcloth.physics.simulation import STABLE_SHARE
 
 
 def describe(sim) -> str:

@@ -9,9 +9,9 @@ import pytest
 import pvcloth
 from conftest import SCENES, small_scene
 from pvcloth import Simulation
-from pvcloth.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
 from pvcloth.cli import main
-from pvcloth.timeseries import ExportInterrupted, export
+from pvcloth.io.checkpoint import CheckpointError, load_checkpoint, save_checkpoint
+from pvcloth.io.timeseries import ExportInterrupted, export
 
 
 def cloth():

@@ -131,7 +131,7 @@ def test_a_pin_dragged_very_fast(integrator):
 def test_a_non_finite_state_raises_in_every_backend_and_integrator(bad, where, integrator, backend):
     """No backend calls NaN finite (the compiled update once folded its
     finiteness test away under fast-math)."""
-    from pvcloth.kernels import available
+    from pvcloth.physics.kernels import available
 
     if backend == "numba" and not available():
         pytest.skip("numba not installed")
@@ -188,7 +188,7 @@ def test_a_step_far_below_what_the_run_needs_is_refused_before_it_starts():
 
 
 def test_a_cloth_bigger_than_the_memory_is_refused_with_the_numbers():
-    from pvcloth.simulation import PEAK_BYTES_PER_POINT, available_memory
+    from pvcloth.physics.simulation import PEAK_BYTES_PER_POINT, available_memory
 
     have = available_memory()
     if have is None or have > 4096**2 * PEAK_BYTES_PER_POINT:

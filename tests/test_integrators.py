@@ -12,7 +12,7 @@ from test_physics import two_body
 
 from conftest import small_scene
 from pvcloth import INTEGRATORS, Control, PinSpec, Simulation, State, get_integrator
-from pvcloth.integrators.base import largest_stable_step
+from pvcloth.physics.integrators.base import largest_stable_step
 
 ALL = sorted(INTEGRATORS)
 EXPLICIT = [name for name in ALL if name != "implicit_euler"]

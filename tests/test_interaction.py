@@ -24,7 +24,7 @@ pytestmark = [
 
 @pytest.fixture
 def app(tmp_path):
-    from pvcloth.app import ClothApp
+    from pvcloth.visual.window import ClothApp
 
     sim = Simulation.from_file(SCENES / "hanging.toml")
     sim.advance(0.6)  # let it fall so it faces the camera
@@ -40,7 +40,7 @@ def app(tmp_path):
 
 
 def screen_of(app, k):
-    from pvcloth.interaction import world_to_display
+    from pvcloth.visual.interaction import world_to_display
 
     return world_to_display(app.plotter.renderer, app.sim.positions[k : k + 1])[0]
 
@@ -79,7 +79,7 @@ def test_projection_matches_vtk(app):
 
 
 def test_drag_moves_the_point_and_its_neighbours_not_the_camera(app):
-    from pvcloth.interaction import display_to_world
+    from pvcloth.visual.interaction import display_to_world
 
     nx, _ = app.sim.shape
     k = 16 + nx * 8  # a free point in the lower half
@@ -201,7 +201,7 @@ def test_the_status_shows_the_real_time_fraction_a_clock_measures(app):
     """Real time at 32x32; slow motion when each step is made to cost more
     than the cloth time it covers. Either way the figure shown is simulated
     over wall seconds, as the test's own clock measures it."""
-    from pvcloth.window_physics import MEASURE_WINDOW
+    from pvcloth.visual.window_physics import MEASURE_WINDOW
 
     for slow in (False, True):
         if slow:
@@ -240,7 +240,7 @@ def test_the_status_shows_the_real_time_fraction_a_clock_measures(app):
 
 def test_a_drag_in_slow_motion_moves_the_pin_at_the_hands_speed_in_cloth_time(app):
     """Played at wall speed, a drag in slow motion once threw a cloth 25 m."""
-    from pvcloth.interaction import MAX_DRAG_SPEED
+    from pvcloth.visual.interaction import MAX_DRAG_SPEED
 
     advance = app.sim.advance
 
@@ -373,7 +373,7 @@ def test_w_toggles_wind_and_the_slider_sets_its_speed_and_no_default_key_acts(ap
 
 
 def test_a_diverging_run_pauses_on_a_calm_state_and_names_a_step(app):
-    from pvcloth.window_physics import CALM_SPEED
+    from pvcloth.visual.window_physics import CALM_SPEED
 
     app.request(app.sim.set_step, 0.004, "ignore")  # far above the stable step
     app.wait()
@@ -410,7 +410,7 @@ def test_screenshots_get_new_names_shown_and_printed(app, capsys):
 
 @pytest.mark.parametrize("size", [(640, 480), (1280, 1000)])
 def test_layout_is_in_normalized_coordinates(size):
-    from pvcloth.app import ClothApp
+    from pvcloth.visual.window import ClothApp
 
     sim = Simulation.from_file(SCENES / "hanging.toml")
     app = ClothApp(sim, off_screen=True, window_size=size)

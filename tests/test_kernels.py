@@ -8,7 +8,7 @@ import pytest
 import pvcloth
 from conftest import SCENES, small_scene
 from pvcloth import INTEGRATORS, ObstacleSpec, SceneError, Simulation, WindSpec
-from pvcloth.kernels import available, resolve_backend
+from pvcloth.physics.kernels import available, resolve_backend
 
 pytestmark = pytest.mark.skipif(not available(), reason="numba not installed")
 
@@ -76,7 +76,7 @@ BIG_STEP = """
 import sys, time
 import numpy as np
 import pvcloth
-from pvcloth import kernels
+from pvcloth.physics import kernels
 
 scene = pvcloth.load_scene(sys.argv[1]).with_resolution(int(sys.argv[2]))
 sim = pvcloth.Simulation(scene, dt=1e-5, stability="ignore")  # cpu_speed.py's run
@@ -148,7 +148,7 @@ def test_openmp_is_the_threading_layer_chosen():
     env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_THREADING")}
     env.pop("NUMBA_NUM_THREADS", None)
     run = (
-        "import pvcloth; from pvcloth import kernels;"
+        "import pvcloth; from pvcloth.physics import kernels;"
         "pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(80, 80)))).step();"
         "print(kernels.threading_layer())"
     )
@@ -160,7 +160,7 @@ def importable_layers() -> list[str]:
     """numba's threading layers that load on this machine, pvcloth's order."""
     import importlib
 
-    from pvcloth.kernels import THREADING_LAYERS
+    from pvcloth.physics.kernels import THREADING_LAYERS
 
     pools = {"omp": "omppool", "tbb": "tbbpool", "workqueue": "workqueue"}
     layers = []
@@ -179,7 +179,7 @@ MANY_FRAMES = """
 import sys, time
 import numpy as np
 import pvcloth
-from pvcloth import kernels
+from pvcloth.physics import kernels
 
 scene = pvcloth.load_scene(sys.argv[1]).with_resolution(64)
 sim = pvcloth.Simulation(scene, stability="substep")

@@ -21,7 +21,7 @@ def cloth_pixels(image: np.ndarray) -> np.ndarray:
 
 
 def test_grid_point_k_is_solver_point_k():
-    from pvcloth.view import cloth_grid
+    from pvcloth.visual.view import cloth_grid
 
     sim = Simulation(small_scene(5).replace(cloth=pvcloth.ClothSpec(resolution=(5, 3))))
     grid = cloth_grid(sim.positions, sim.shape)
@@ -33,7 +33,7 @@ def test_grid_point_k_is_solver_point_k():
 
 
 def test_gif_has_the_frames_and_size_asked_and_the_cloth_moves(tmp_path):
-    from pvcloth.movie import render
+    from pvcloth.visual.movie import render
 
     sim = Simulation.from_file(SCENES / "hanging.toml")
     out = tmp_path / "hanging.gif"
@@ -50,7 +50,7 @@ def test_gif_has_the_frames_and_size_asked_and_the_cloth_moves(tmp_path):
 def test_cloth_pixels_are_where_the_camera_projects_the_cloth(tmp_path):
     import pyvista as pv
 
-    from pvcloth.view import ClothView
+    from pvcloth.visual.view import ClothView
 
     sim = Simulation.from_file(SCENES / "hanging.toml")
     sim.advance(0.3)
@@ -75,7 +75,7 @@ def test_cloth_pixels_are_where_the_camera_projects_the_cloth(tmp_path):
 
 
 def test_png_and_mp4(tmp_path):
-    from pvcloth.movie import render
+    from pvcloth.visual.movie import render
 
     for name in ("last.png", "clip.mp4"):
         sim = Simulation(small_scene(8, damping=0.1, dt=5e-4))
@@ -85,7 +85,7 @@ def test_png_and_mp4(tmp_path):
 
 
 def test_divergence_mid_movie_keeps_a_valid_shorter_gif(tmp_path):
-    from pvcloth.movie import MovieInterrupted, render
+    from pvcloth.visual.movie import MovieInterrupted, render
 
     # dt far above the stable step: the first frame draws, then it blows up
     sim = Simulation(small_scene(8, stiffness=2000.0), dt=2e-3, stability="ignore")
@@ -99,8 +99,8 @@ def test_divergence_mid_movie_keeps_a_valid_shorter_gif(tmp_path):
 
 
 def test_interruption_before_any_frame_leaves_no_file(tmp_path, monkeypatch):
-    from pvcloth import view
-    from pvcloth.movie import MovieInterrupted, render
+    from pvcloth.visual import view
+    from pvcloth.visual.movie import MovieInterrupted, render
 
     def interrupt(self):
         raise KeyboardInterrupt
@@ -117,7 +117,7 @@ REFERENCE = "tests/reference/hanging_16_t0.4.png"
 
 def reference_frame(tmp_path) -> np.ndarray:
     """The hanging scene at 16x16 after 0.4 s, 200x150 pixels."""
-    from pvcloth.movie import render
+    from pvcloth.visual.movie import render
 
     scene = pvcloth.load_scene(SCENES / "hanging.toml")
     cloth = pvcloth.ClothSpec(
@@ -152,7 +152,7 @@ def test_image_matches_stored_reference(tmp_path):
 def test_environment_scenes_render_with_their_obstacles(name, tmp_path):
     """Each wind or obstacle scene renders a GIF in which the obstacles show:
     blue-grey solid pixels for a sphere or box, beige pixels for the ground."""
-    from pvcloth.movie import render
+    from pvcloth.visual.movie import render
 
     sim = Simulation.from_file(SCENES / f"{name}.toml")
     out = tmp_path / f"{name}.gif"

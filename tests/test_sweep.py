@@ -13,7 +13,7 @@ import pytest
 
 from conftest import small_scene
 from pvcloth import SceneError
-from pvcloth.sweep import (
+from pvcloth.studies.sweep import (
     SweepError,
     expand,
     parse_sets,

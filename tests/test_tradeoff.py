@@ -12,7 +12,7 @@ import pytest
 from conftest import SCENES, small_scene
 from pvcloth import INTEGRATORS, Simulation
 from pvcloth.cli import main
-from pvcloth.tradeoff import measure, pareto_front
+from pvcloth.studies.tradeoff import measure, pareto_front
 
 
 @pytest.fixture(scope="module")

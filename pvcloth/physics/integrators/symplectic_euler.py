@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Integrator, register, reuse_or_allocate
+from pvcloth.physics.integrators.base import Integrator, register, reuse_or_allocate
 
 
 @register
@@ -26,7 +26,7 @@ class SymplecticEuler(Integrator):
         f = self.forces(model, state)
         new = reuse_or_allocate(out, state)
         if getattr(model, "compiled", False):
-            from ..kernels import kick_drift
+            from pvcloth.physics.kernels import kick_drift
 
             new.checked = kick_drift(
                 state.x, state.v, f, control.inv_mass, dt, new.x, new.v, model.shape

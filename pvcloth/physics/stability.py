@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import ArpackError, eigsh
 
-from .errors import SceneError
+from pvcloth.errors import SceneError
 
 
 @dataclass(frozen=True)

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import CheckpointError, PvclothError
-from .timeseries import atomic_write
+from pvcloth.errors import CheckpointError, PvclothError
+from pvcloth.io.timeseries import atomic_write
 
 TAG = "pvcloth-checkpoint"
 VERSION = 1
@@ -124,9 +124,9 @@ def _scalar(data, key, path, kind, low, high):
 
 
 def _rebuild(data: dict, path: Path):
-    from .integrators import INTEGRATORS
-    from .scene import MAX_LENGTH, Scene
-    from .simulation import MAX_STEPS, SPEED_LIMIT, Simulation
+    from pvcloth.physics.integrators import INTEGRATORS
+    from pvcloth.physics.simulation import MAX_STEPS, SPEED_LIMIT, Simulation
+    from pvcloth.scene.spec import MAX_LENGTH, Scene
 
     if str(data.get("tag", "")) != TAG:
         raise CheckpointError(f"{path} is not a pvcloth checkpoint (no {TAG!r} tag)")

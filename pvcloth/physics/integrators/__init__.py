@@ -4,7 +4,7 @@ To add one: write a subclass of :class:`Integrator` in its own module,
 decorate it with :func:`register` and import the module here.
 """
 
-from . import (  # noqa: F401  (importing registers them)
+from pvcloth.physics.integrators import (  # noqa: F401  (importing registers them)
     explicit_euler,
     fast_mass_spring,
     implicit_euler,
@@ -12,13 +12,13 @@ from . import (  # noqa: F401  (importing registers them)
     symplectic_euler,
     verlet,
 )
-from .base import INTEGRATORS, Integrator, register
+from pvcloth.physics.integrators.base import INTEGRATORS, Integrator, register
 
 __all__ = ["INTEGRATORS", "Integrator", "get_integrator", "register"]
 
 
 def get_integrator(name: str) -> Integrator:
     """A new integrator instance by registry name, e.g. ``"symplectic_euler"``."""
-    from ..validation import choice
+    from pvcloth.scene.validation import choice
 
     return INTEGRATORS[choice("integrator", name, sorted(INTEGRATORS))]()

@@ -1,6 +1,6 @@
 """The arrays that change every step, and the per-step inputs.
 
-Following Warp and Newton, constants live in :class:`~pvcloth.model.Model`,
+Following Warp and Newton, constants live in :class:`~pvcloth.physics.model.Model`,
 changing arrays in :class:`State` and what the user imposes from outside
 (pins and their targets, the mouse drag) in :class:`Control`.
 """

@@ -1,7 +1,7 @@
 """Compiled kernels (numba) for the hot loop: spring forces and the
 semi-implicit Euler step.
 
-The NumPy code in :mod:`pvcloth.forces` stays the reference; these kernels
+The NumPy code in :mod:`pvcloth.physics.forces` stays the reference; these kernels
 compute the same sums in a different order (equal to round-off, tested) and
 are used when numba is installed, unless ``PVCLOTH_BACKEND=numpy`` or
 ``backend="numpy"`` asks for the pure NumPy path.
@@ -79,7 +79,7 @@ def available() -> bool:
 def resolve_backend(backend: str | None) -> str:
     """``"numba"`` or ``"numpy"``: what ``backend`` (or ``PVCLOTH_BACKEND``) asks
     for, with ``"auto"`` choosing numba when it is installed."""
-    from .validation import choice
+    from pvcloth.scene.validation import choice
 
     if backend is None:
         backend = os.environ.get("PVCLOTH_BACKEND", "auto")
@@ -87,7 +87,7 @@ def resolve_backend(backend: str | None) -> str:
     if backend == "auto":
         return "numba" if available() else "numpy"
     if backend == "numba" and not available():
-        from .errors import SceneError
+        from pvcloth.errors import SceneError
 
         raise SceneError("backend", "'numba' was asked for but numba is not installed")
     return backend
@@ -325,7 +325,7 @@ class _Warming:
         self.kernel = kernel
 
     def __call__(self, *args):
-        from .signals import deferred
+        from pvcloth.signals import deferred
 
         with deferred():
             result = self.kernel(*args)

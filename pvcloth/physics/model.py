@@ -11,10 +11,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .forces import AirDamping, Gravity, Springs, Wind
-from .grid import initial_positions, lumped_masses
-from .kernels import resolve_backend
-from .obstacles import build_obstacle
+from pvcloth.physics.forces import AirDamping, Gravity, Springs, Wind
+from pvcloth.physics.grid import initial_positions, lumped_masses
+from pvcloth.physics.kernels import resolve_backend
+from pvcloth.physics.obstacles import build_obstacle
 
 
 @dataclass
@@ -32,9 +32,9 @@ class Model:
     pinned : ndarray of bool, shape (N,)
         Points pinned by the scene.
     forces : list
-        Force terms (see :mod:`pvcloth.forces`), only those the scene needs.
+        Force terms (see :mod:`pvcloth.physics.forces`), only those the scene needs.
     obstacles : list
-        Rigid obstacles (see :mod:`pvcloth.obstacles`); empty if the scene
+        Rigid obstacles (see :mod:`pvcloth.physics.obstacles`); empty if the scene
         has none, and then no collision code runs.
     """
 
@@ -49,7 +49,7 @@ class Model:
     def __post_init__(self):
         self._plan = None
         if self.backend == "numba":
-            from .kernels import SpringPlan
+            from pvcloth.physics.kernels import SpringPlan
 
             self._plan = SpringPlan(self.springs, self.shape)
 
@@ -64,7 +64,7 @@ class Model:
 
     @property
     def compiled(self) -> bool:
-        """Whether springs run in the compiled kernels (:mod:`pvcloth.kernels`)."""
+        """Whether springs run in the compiled kernels (:mod:`pvcloth.physics.kernels`)."""
         return self._plan is not None
 
     def compute_forces(self, x: np.ndarray, v: np.ndarray, out: np.ndarray | None = None):
@@ -83,7 +83,7 @@ class Model:
     def _compiled_forces(self, x, v, f) -> None:
         """Gravity and air damping (written over ``f``) and springs in
         compiled kernels; any other term (wind) adds on in NumPy."""
-        from .kernels import body_forces, spring_forces
+        from pvcloth.physics.kernels import body_forces, spring_forces
 
         gravity, air = np.zeros(3), 0.0
         for term in self.forces:

@@ -8,8 +8,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from ..state import State
-from .base import Integrator, register
+from pvcloth.physics.integrators.base import Integrator, register
+from pvcloth.physics.state import State
 
 
 @register
@@ -82,7 +82,7 @@ class FastMassSpring(Integrator):
     # -- a step ---------------------------------------------------------------------
 
     def step(self, model, state, control, dt, out=None):
-        from ..forces import Springs
+        from pvcloth.physics.forces import Springs
 
         self._prepare(model, control, dt)
         x, v = state.x, state.v

@@ -27,11 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import DisplayError, DivergenceError, SceneError
-from .integrators import INTEGRATORS
-from .interaction import ClothDragStyle, DragPath
-from .scene import WindSpec
-from .window_physics import PhysicsThread
+from pvcloth.errors import DisplayError, DivergenceError, SceneError
+from pvcloth.physics.integrators import INTEGRATORS
+from pvcloth.scene.spec import WindSpec
+from pvcloth.visual.interaction import ClothDragStyle, DragPath
+from pvcloth.visual.window_physics import PhysicsThread
 
 #: Wind the ``w`` key turns on in a scene that has none: across a cloth that
 #: hangs in the x-z plane, away from the default camera.
@@ -129,7 +129,7 @@ class ClothApp:
     does. Off-screen, frames can be driven by hand:
 
     >>> import pvcloth
-    >>> from pvcloth.app import ClothApp
+    >>> from pvcloth.visual.window import ClothApp
     >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
     >>> app = ClothApp(sim, off_screen=True, window_size=(320, 240))
     >>> app.single_frame(); app.wait()  # one frame of cloth time
@@ -150,7 +150,7 @@ class ClothApp:
     ):
         import pyvista as pv
 
-        from .view import ClothView
+        from pvcloth.visual.view import ClothView
 
         self.sim = sim
         self.fps = fps

@@ -12,7 +12,7 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from numbers import Integral, Real
 
-from .errors import SceneError
+from pvcloth.errors import SceneError
 
 
 def describe(value: object) -> str:

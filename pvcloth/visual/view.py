@@ -65,7 +65,7 @@ def cloth_grid(positions: np.ndarray, shape: tuple[int, int]) -> pv.StructuredGr
     Examples
     --------
     >>> import numpy as np
-    >>> from pvcloth.view import cloth_grid
+    >>> from pvcloth.visual.view import cloth_grid
     >>> grid = cloth_grid(np.random.rand(12, 3), (4, 3))
     >>> grid.dimensions
     (4, 3, 1)
@@ -92,7 +92,7 @@ def update_cloth_mesh(grid: pv.StructuredGrid, sim) -> None:
     array is made the active scalars: a plotter that draws the grid in one
     colour keeps doing so.
     """
-    from .grid import point_stretch
+    from pvcloth.physics.grid import point_stretch
 
     state = sim.state  # one state throughout, should a physics thread replace it
     positions = state.x.copy()
@@ -181,7 +181,7 @@ class ClothView:
     Examples
     --------
     >>> import pyvista as pv, pvcloth
-    >>> from pvcloth.view import ClothView
+    >>> from pvcloth.visual.view import ClothView
     >>> sim = pvcloth.Simulation(pvcloth.Scene())
     >>> plotter = pv.Plotter(off_screen=True)
     >>> view = ClothView(sim, plotter)

@@ -34,8 +34,8 @@ from xml.sax.saxutils import quoteattr
 import meshio
 import numpy as np
 
-from .errors import ExportInterrupted, SceneError
-from .signals import deferred
+from pvcloth.errors import ExportInterrupted, SceneError
+from pvcloth.signals import deferred
 
 FORMATS = (".pvd", ".xdmf", ".obj")
 

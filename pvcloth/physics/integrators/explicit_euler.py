@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Integrator, register, reuse_or_allocate
+from pvcloth.physics.integrators.base import Integrator, register, reuse_or_allocate
 
 
 @register

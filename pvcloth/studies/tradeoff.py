@@ -5,7 +5,7 @@ reference run (RK4 at a quarter of the smallest step asked for): the RMS
 distance of the points at the end, the relative difference of total energy
 at the end (the numerical energy drift, since the reference loses only what
 damping takes), the wall time per simulated second, and whether it stayed
-stable. Runs go through :class:`~pvcloth.simulation.Simulation` with
+stable. Runs go through :class:`~pvcloth.physics.simulation.Simulation` with
 ``stability="ignore"``, so steps above the limit really run and show as
 unstable.
 """
@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import DivergenceError
-from .integrators import INTEGRATORS
-from .simulation import Simulation
+from pvcloth.errors import DivergenceError
+from pvcloth.physics.integrators import INTEGRATORS
+from pvcloth.physics.simulation import Simulation
 
 
 @dataclass

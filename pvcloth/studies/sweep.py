@@ -42,9 +42,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import DivergenceError, SceneError, SweepError
-from .scene import Scene
-from .signals import deferred
+from pvcloth.errors import DivergenceError, SceneError, SweepError
+from pvcloth.scene.spec import Scene
+from pvcloth.signals import deferred
 
 FIELDS = [
     "id",
@@ -199,7 +199,7 @@ def expand(scene: Scene, sets: dict[str, list]) -> list[Unit]:
 def reference_step(scenes: list[Scene], duration: float) -> float:
     """RK4 at a quarter of the smallest step swept, kept below half its stable
     step, and dividing ``duration`` exactly."""
-    from .simulation import Simulation
+    from pvcloth.physics.simulation import Simulation
 
     smallest = min(_step(s) for s in scenes)
     limit = Simulation(scenes[0], integrator="rk4", stability="ignore").stable_dt()
@@ -209,7 +209,7 @@ def reference_step(scenes: list[Scene], duration: float) -> float:
 
 def _step(scene: Scene) -> float:
     """The scene's step, or the automatic one it gets when it gives none."""
-    from .simulation import Simulation
+    from pvcloth.physics.simulation import Simulation
 
     if scene.solver.dt is not None:
         return scene.solver.dt
@@ -218,7 +218,7 @@ def _step(scene: Scene) -> float:
 
 def run_reference(scene: Scene, dt: float, duration: float) -> dict:
     """Positions and energy of the fine solution (a Dask task)."""
-    from .simulation import Simulation
+    from pvcloth.physics.simulation import Simulation
 
     sim = Simulation(scene, integrator="rk4", dt=dt, stability="ignore")
     sim.advance(duration)
@@ -227,7 +227,7 @@ def run_reference(scene: Scene, dt: float, duration: float) -> dict:
 
 def run_unit(unit: Unit, reference: dict, duration: float) -> dict:
     """One short simulation, compared with its reference (a Dask task)."""
-    from .simulation import Simulation
+    from pvcloth.physics.simulation import Simulation
 
     scene = unit.scene
     # Whole steps that end exactly at `duration`, as in the trade-off command.

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from .grid import SPRING_OFFSETS, border_factor, pair_slices
+from pvcloth.physics.grid import SPRING_OFFSETS, border_factor, pair_slices
 
 #: Lengths below this count as zero: a spring between coincident points has
 #: no direction, so it exerts no force instead of producing NaN.

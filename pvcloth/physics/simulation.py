@@ -8,12 +8,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import DivergenceError, SceneError
-from .integrators import get_integrator
-from .model import build_model
-from .scene import MAX_LENGTH, STABILITY_POLICIES, Scene, load_scene
-from .state import Control, State
-from .validation import choice, integer, real
+from pvcloth.errors import DivergenceError, SceneError
+from pvcloth.physics.integrators import get_integrator
+from pvcloth.physics.model import build_model
+from pvcloth.physics.state import Control, State
+from pvcloth.scene.spec import MAX_LENGTH, STABILITY_POLICIES, Scene, load_scene
+from pvcloth.scene.validation import choice, integer, real
 
 #: No cloth point moves faster than this (m/s) unless the solver blew up.
 SPEED_LIMIT = 1.0e4
@@ -199,7 +199,9 @@ class Simulation:
         ['pinned', 'speed', 'stretch', 'velocity']
         """
         if self._mesh is None:
-            from .view import cloth_mesh  # the view layer, imported only when asked for
+            from pvcloth.visual.view import (
+                cloth_mesh,  # the view layer, imported only when asked for
+            )
 
             self._mesh = cloth_mesh(self)
         return self._mesh
@@ -209,7 +211,7 @@ class Simulation:
         call it after editing ``sim.state`` by hand). Costs nothing until the
         mesh is first used."""
         if self._mesh is not None:
-            from .view import update_cloth_mesh
+            from pvcloth.visual.view import update_cloth_mesh
 
             update_cloth_mesh(self._mesh, self)
 
@@ -224,7 +226,7 @@ class Simulation:
         >>> sim.advance(0.2)
         >>> sim.plot(scalars="stretch", off_screen=True, screenshot="stretch.png")
         """
-        from .view import plot_cloth
+        from pvcloth.visual.view import plot_cloth
 
         return plot_cloth(self, **kwargs)
 
@@ -250,7 +252,7 @@ class Simulation:
         )
 
     def _repr_html_(self) -> str:
-        from .scene import _html_table
+        from pvcloth.scene.spec import _html_table
 
         return _html_table(f"Simulation {self.scene.name!r}", self.summary())
 
@@ -395,8 +397,8 @@ class Simulation:
         ----------
         wind : WindSpec or None
         """
-        from .forces import Wind
-        from .scene import WindSpec
+        from pvcloth.physics.forces import Wind
+        from pvcloth.scene.spec import WindSpec
 
         if wind is not None and not isinstance(wind, WindSpec):
             raise SceneError("wind", f"expected a WindSpec or None, got {type(wind).__name__}")

@@ -25,7 +25,7 @@ from concurrent.futures import Future
 
 import numpy as np
 
-from .errors import DivergenceError
+from pvcloth.errors import DivergenceError
 
 #: The state kept from before each of the last this many chunks: a
 #: divergence goes back to the newest calm one.
@@ -150,7 +150,7 @@ class PhysicsThread:
         self._requests.put(None)
 
     def _loop(self):
-        from .kernels import use_threads
+        from pvcloth.physics.kernels import use_threads
 
         # The drawing needs a core: leave it one (see use_threads).
         use_threads((os.cpu_count() or 1) - 1)

@@ -6,9 +6,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import cg, spsolve
 
-from ..errors import DivergenceError
-from ..state import State
-from .base import Integrator, register
+from pvcloth.errors import DivergenceError
+from pvcloth.physics.integrators.base import Integrator, register
+from pvcloth.physics.state import State
 
 
 @register

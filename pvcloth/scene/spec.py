@@ -32,9 +32,8 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-from .errors import SceneError
-from .integrators import INTEGRATORS
-from .validation import check_keys, choice, integer, real, sequence, vector
+from pvcloth.errors import SceneError
+from pvcloth.scene.validation import check_keys, choice, integer, real, sequence, vector
 
 #: Largest number of points along one side of the cloth.
 MAX_RESOLUTION = 4096
@@ -205,6 +204,17 @@ class PinSpec:
 
 
 STABILITY_POLICIES = ("refuse", "substep", "ignore")
+#: The integrator names a scene may give. The scene layer knows the names
+#: only, so that describing a scene needs none of the solvers; every
+#: integrator the registry holds must be one of them (``register`` checks).
+INTEGRATOR_NAMES = (
+    "explicit_euler",
+    "fast_mass_spring",
+    "implicit_euler",
+    "rk4",
+    "symplectic_euler",
+    "verlet",
+)
 
 
 @dataclass(frozen=True)
@@ -242,7 +252,7 @@ class SolverSpec:
 
     def __post_init__(self):
         _set(self, "stability", choice("stability", self.stability, STABILITY_POLICIES))
-        _set(self, "integrator", choice("integrator", self.integrator, sorted(INTEGRATORS)))
+        _set(self, "integrator", choice("integrator", self.integrator, INTEGRATOR_NAMES))
         if self.dt is not None:
             _set(self, "dt", real("dt", self.dt, minimum=0.0, exclusive=True, maximum=10.0))
 

@@ -96,7 +96,7 @@ def point_stretch(x: np.ndarray, rest: np.ndarray, shape: tuple[int, int]) -> np
     Examples
     --------
     >>> import numpy as np
-    >>> from pvcloth.grid import point_stretch
+    >>> from pvcloth.physics.grid import point_stretch
     >>> rest = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
     >>> point_stretch(rest * [2, 1, 1], rest, (2, 2))  # twice as wide
     array([1.5, 1.5, 1.5, 1.5])

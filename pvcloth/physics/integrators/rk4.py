@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from ..state import State
-from .base import Integrator, register
+from pvcloth.physics.integrators.base import Integrator, register
+from pvcloth.physics.state import State
 
 
 @register

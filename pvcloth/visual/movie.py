@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import MovieInterrupted, SceneError
-from .signals import deferred
-from .timeseries import remove_orphaned_temporaries
+from pvcloth.errors import MovieInterrupted, SceneError
+from pvcloth.io.timeseries import remove_orphaned_temporaries
+from pvcloth.signals import deferred
 
 FORMATS = (".gif", ".mp4", ".png")
 
@@ -171,7 +171,7 @@ def render(
     with deferred():  # a signal inside VTK's module set-up crashed the process
         import pyvista as pv
 
-        from .view import ClothView
+        from pvcloth.visual.view import ClothView
 
         plotter = pv.Plotter(off_screen=True, notebook=False, window_size=list(size))
     writer = None

@@ -7,12 +7,21 @@ from abc import ABC, abstractmethod
 import numpy as np
 import scipy.sparse as sp
 
+from pvcloth.scene.spec import INTEGRATOR_NAMES
+
 #: Name -> integrator class. Filled by :func:`register`.
 INTEGRATORS: dict[str, type[Integrator]] = {}
 
 
 def register(cls: type[Integrator]) -> type[Integrator]:
-    """Class decorator that makes an integrator available by its ``name``."""
+    """Class decorator that makes an integrator available by its ``name``,
+    which must be one of the names scenes accept
+    (:data:`pvcloth.scene.spec.INTEGRATOR_NAMES`)."""
+    if cls.name not in INTEGRATOR_NAMES:
+        raise ValueError(
+            f"integrator {cls.name!r} is not in pvcloth.scene.spec.INTEGRATOR_NAMES; "
+            f"add it there so scenes can ask for it"
+        )
     INTEGRATORS[cls.name] = cls
     return cls
 
@@ -47,7 +56,7 @@ class Integrator(ABC):
 
     @abstractmethod
     def step(self, model, state, control, dt: float, out=None):
-        """Return the :class:`~pvcloth.state.State` one step ``dt`` later.
+        """Return the :class:`~pvcloth.physics.state.State` one step ``dt`` later.
 
         ``out``, if given, is a state of the same shape whose arrays the
         integrator may overwrite and return (the simulation keeps a spare
@@ -59,7 +68,7 @@ class Integrator(ABC):
         """Largest stable time step near ``state``: this integrator's own step
         applied to the cloth's stiffest mode (see :func:`largest_stable_step`).
         ``inf`` if no step is too large, 0 if none is small enough."""
-        from ..stability import stiffest_mode
+        from pvcloth.physics.stability import stiffest_mode
 
         mode = stiffest_mode(model, state.x, state.v, control.inv_mass)
         return largest_stable_step(type(self), mode.omega, mode.alpha)
@@ -78,7 +87,7 @@ class Integrator(ABC):
 
 def reuse_or_allocate(out, state):
     """``out`` if there is one, else a new state shaped like ``state``."""
-    from ..state import State
+    from pvcloth.physics.state import State
 
     if out is None:
         return State(np.empty_like(state.x), np.empty_like(state.v), state.t)
@@ -111,7 +120,7 @@ class _ModalOscillator:
 def step_matrix(integrator_class, omega: float, alpha: float, dt: float) -> np.ndarray:
     """The 2x2 matrix that maps ``(x, v)`` to the next step's ``(x, v)`` for
     one integrator on one damped mode."""
-    from ..state import Control, State
+    from pvcloth.physics.state import Control, State
 
     model = _ModalOscillator(omega, alpha)
     control = Control(np.zeros(1, bool), np.zeros((1, 3)), np.ones(1))
