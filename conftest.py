@@ -9,6 +9,10 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
     # Several test processes share the cores: threads inside each would only
     # fight (numba reads this when first imported, below).
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+if not os.environ.get("DISPLAY"):
+    # Plotters the tests and docstring examples make themselves get VTK's
+    # EGL window, as pvcloth's own do (pvcloth.visual.view.use_offscreen_gl_if_headless).
+    os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
 import numpy as np
 import pytest
@@ -67,7 +71,7 @@ def free_cloth(n=5, **kwargs) -> pvcloth.Simulation:
 
 
 _PROBE = (
-    "import pvcloth.visual.view, pyvista as pv;"
+    "import pvcloth.visual.view as view, pyvista as pv; view.use_offscreen_gl_if_headless();"
     "pl = pv.Plotter(off_screen=True, window_size=(64, 64));"
     "pl.add_mesh(pv.Sphere()); assert pl.screenshot(return_img=True).shape == (64, 64, 3)"
 )

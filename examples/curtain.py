@@ -24,7 +24,7 @@ scene = pvcloth.Scene(
 )
 sim = pvcloth.Simulation(scene)
 # a push out of the plane on the lower half, so the curtain swings
-nx, ny = sim.shape
+nx, ny = sim.resolution
 lower = np.arange(nx * ny) < nx * ny // 2
 sim.state.v[lower, 1] = 1.5
 

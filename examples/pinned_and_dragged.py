@@ -19,7 +19,7 @@ scene = pvcloth.load_scene(SCENE).replace(
     cloth=pvcloth.ClothSpec(resolution=(24, 24), mass=0.2, orientation="vertical")
 )
 sim = pvcloth.Simulation(scene)
-nx, ny = sim.shape
+nx, ny = sim.resolution
 corner = (nx - 1, ny - 1)
 start = sim.positions[sim.point_index(corner)].copy()
 

@@ -11,10 +11,24 @@ from pvcloth.errors import (
     DisplayError,
     DivergenceError,
     ExportInterrupted,
+    InputError,
     MovieInterrupted,
     PvclothError,
     SceneError,
     SweepError,
+)
+
+# The scene layer is light (no NumPy): its types are imported at once.
+from pvcloth.scene.spec import (
+    ClothSpec,
+    ObstacleSpec,
+    PinSpec,
+    Scene,
+    SolverSpec,
+    SpringSpec,
+    SpringsSpec,
+    WindSpec,
+    load_scene,
 )
 
 try:  # one source for the version: the installed package's metadata (pyproject.toml)
@@ -32,20 +46,6 @@ _LAZY = {
         for name in ("INTEGRATORS", "Integrator", "get_integrator")
     },
     **{name: ("physics.model", name) for name in ("Model", "build_model")},
-    **{
-        name: ("scene.spec", name)
-        for name in (
-            "ClothSpec",
-            "ObstacleSpec",
-            "PinSpec",
-            "Scene",
-            "SolverSpec",
-            "SpringSpec",
-            "SpringsSpec",
-            "WindSpec",
-            "load_scene",
-        )
-    },
     "Simulation": ("physics.simulation", "Simulation"),
     **{name: ("physics.state", name) for name in ("Control", "State")},
     "render": ("visual.movie", "render"),
@@ -78,6 +78,7 @@ __all__ = [
     "DisplayError",
     "DivergenceError",
     "ExportInterrupted",
+    "InputError",
     "Integrator",
     "Model",
     "MovieInterrupted",

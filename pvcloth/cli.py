@@ -5,28 +5,56 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
-from pvcloth.errors import PvclothError
+from pvcloth.errors import InputError, PvclothError
+from pvcloth.scene.overrides import parse_assignment, parse_value
+from pvcloth.scene.spec import STABILITY_POLICIES, load_scene
+from pvcloth.scene.validation import real
 from pvcloth.signals import Terminated, check, deferred, handled
 
 
 def _add_overrides(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", help="scene file (TOML), e.g. data/scenes/hanging.toml")
-    parser.add_argument("--integrator", help="override the scene's integrator")
-    parser.add_argument("--dt", type=float, help="override the scene's time step (s)")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="change a scene key, e.g. --set springs.structural.stiffness=2000 "
+        "(dotted keys as in the scene file; repeat for more)",
+    )
+    parser.add_argument("--integrator", help="the same as --set solver.integrator=NAME")
+    parser.add_argument("--dt", type=float, help="the same as --set solver.dt=SECONDS")
     parser.add_argument(
         "--stability",
-        choices=("refuse", "substep", "ignore"),
-        help="a step above the stable one is refused, split into substeps, or run anyway",
+        choices=STABILITY_POLICIES,
+        help="the same as --set solver.stability=...: a step above the stable one is refused, "
+        "split into substeps, or run anyway",
     )
+
+
+def _scene(args):
+    """The scene file with the command line's changes, in the dotted-key
+    dialect every scene change uses (:mod:`pvcloth.scene.overrides`)."""
+    changes = {}
+    for item in args.set:
+        key, text = parse_assignment(item)
+        changes[key] = parse_value(text)
+    for key, value in (
+        ("solver.integrator", args.integrator),
+        ("solver.dt", args.dt),
+        ("solver.stability", args.stability),
+    ):
+        if value is not None:
+            changes[key] = value
+    return load_scene(args.scene).with_overrides(changes)
 
 
 def _simulation(args):
     from pvcloth.physics.simulation import Simulation
 
-    return Simulation.from_file(
-        args.scene, integrator=args.integrator, dt=args.dt, stability=args.stability
-    )
+    return Simulation(_scene(args))
 
 
 def cmd_info(args) -> None:
@@ -36,20 +64,16 @@ def cmd_info(args) -> None:
 
 
 def cmd_simulate(args) -> None:
-    from tqdm import tqdm
+    from pvcloth.progress import frame_bar
 
-    from pvcloth.scene.validation import real
-
-    seconds = real("--seconds", args.seconds, minimum=0.0, exclusive=True)
-    fps = real("--fps", args.fps, minimum=0.0, exclusive=True, maximum=1000.0)
+    seconds = real("--seconds", args.seconds, minimum=0.0, exclusive=True, error=InputError)
+    fps = real("--fps", args.fps, minimum=0.0, exclusive=True, maximum=1000.0, error=InputError)
     sim = _simulation(args)
-    sim.check_run_length(seconds)
     frames = max(1, round(seconds * fps))
     start = time.perf_counter()
-    for _ in tqdm(
-        range(frames), desc=f"simulating {sim.scene.name}", unit="frame", disable=args.quiet
-    ):
-        sim.advance(seconds / frames)
+    # frames + 1: frame 0 is the start; each later one is seconds / frames on.
+    loop = sim.frames(frames + 1, frames / seconds)
+    for _ in frame_bar(loop, frames + 1, f"simulating {sim.scene.name}", enabled=not args.quiet):
         check()
     wall = time.perf_counter() - start
     energy = sim.energy()
@@ -104,9 +128,6 @@ def cmd_export(args) -> None:
 
 
 def cmd_tradeoff(args) -> None:
-    from pathlib import Path
-
-    from pvcloth.scene.spec import load_scene
     from pvcloth.studies import tradeoff
 
     scene = load_scene(args.scene)
@@ -129,9 +150,6 @@ def cmd_tradeoff(args) -> None:
 
 
 def cmd_sweep(args) -> None:
-    from pathlib import Path
-
-    from pvcloth.scene.spec import load_scene
     from pvcloth.studies import sweep
 
     scene = load_scene(args.scene)

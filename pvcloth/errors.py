@@ -14,7 +14,26 @@ class PvclothError(Exception):
     """Base class of every error pvcloth raises on purpose."""
 
 
-class SceneError(PvclothError, ValueError):
+class InputError(PvclothError, ValueError):
+    """An argument that is not allowed: a value passed to a function or
+    given on the command line (a frame count, a picture size, a point
+    index...). Bad scene keys are the subclass :class:`SceneError`.
+
+    Parameters
+    ----------
+    key : str
+        Name of the offending argument or option, e.g. ``"frames"``.
+    message : str
+        What is wrong and what is allowed.
+    """
+
+    def __init__(self, key: str, message: str):
+        self.key = key
+        self.message = message
+        super().__init__(f"{key}: {message}" if key else message)
+
+
+class SceneError(InputError):
     """A scene description holds a key or value that is not allowed.
 
     Parameters
@@ -24,11 +43,6 @@ class SceneError(PvclothError, ValueError):
     message : str
         What is wrong and what is allowed.
     """
-
-    def __init__(self, key: str, message: str):
-        self.key = key
-        self.message = message
-        super().__init__(f"{key}: {message}" if key else message)
 
     def under(self, prefix: str) -> SceneError:
         """Return the same error with ``prefix`` put in front of its key."""
@@ -67,7 +81,8 @@ class CheckpointError(PvclothError):
 
 
 class SweepError(PvclothError):
-    """A sweep that cannot run as asked (bad ``--set``, missing Dask...)."""
+    """A sweep that cannot run as asked (a setting with no values, a bad
+    range, Dask missing...)."""
 
 
 class DisplayError(PvclothError):

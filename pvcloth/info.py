@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pvcloth.physics.simulation import STABLE_SHARE
 
+if TYPE_CHECKING:  # for annotations only
+    from pvcloth.physics.simulation import Simulation
 
-def describe(sim) -> str:
+
+def describe(sim: Simulation) -> str:
     """A few lines that say what the model built and how it will be stepped.
 
     Parameters
@@ -21,7 +25,7 @@ def describe(sim) -> str:
     str
     """
     model, scene = sim.model, sim.scene
-    nx, ny = sim.shape
+    nx, ny = sim.resolution
     lines = [
         f"scene       {scene.name}",
         f"particles   {model.n_points} ({nx} x {ny}), cloth {scene.cloth.size[0]:g} x "

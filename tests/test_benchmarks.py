@@ -44,6 +44,7 @@ RUNS = {
     "memory.py": ([], "memory.md"),
     "render_cost.py": (["--frames", "2", "--sizes", "8"], "render_cost.md"),
     "startup.py": ([], "startup.md"),
+    "step_allocations.py": ([], "step_allocations.md"),
     "sweep_scaling.py": ([], "sweep_scaling.md"),
 }
 

@@ -81,7 +81,7 @@ def test_projection_matches_vtk(app):
 def test_drag_moves_the_point_and_its_neighbours_not_the_camera(app):
     from pvcloth.visual.interaction import display_to_world
 
-    nx, _ = app.sim.shape
+    nx, _ = app.sim.resolution
     k = 16 + nx * 8  # a free point in the lower half
     x, y, depth = screen_of(app, k)
     camera = app.plotter.camera_position
@@ -108,7 +108,7 @@ def test_drag_moves_the_point_and_its_neighbours_not_the_camera(app):
 
 
 def test_the_grabbed_point_has_a_handle_above_the_cloth_and_hover_shows_the_point(app):
-    nx, _ = app.sim.shape
+    nx, _ = app.sim.resolution
     k = 16 + nx * 8
     x, y, _ = screen_of(app, k)
     iren = app.plotter.iren
@@ -131,7 +131,7 @@ def test_the_grabbed_point_has_a_handle_above_the_cloth_and_hover_shows_the_poin
 
 
 def test_shift_release_leaves_the_point_pinned_and_u_unpins(app):
-    nx, _ = app.sim.shape
+    nx, _ = app.sim.resolution
     k = 10 + nx * 10
     x, y, _ = screen_of(app, k)
     iren = app.plotter.iren
@@ -249,7 +249,7 @@ def test_a_drag_in_slow_motion_moves_the_pin_at_the_hands_speed_in_cloth_time(ap
         advance(seconds)
 
     app.sim.advance = dear_advance
-    nx, _ = app.sim.shape
+    nx, _ = app.sim.resolution
     k = 16 + nx * 8
     x, y, _ = screen_of(app, k)
     iren = app.plotter.iren

@@ -7,7 +7,7 @@ import pytest
 
 import pvcloth
 from conftest import SCENES, small_scene
-from pvcloth import INTEGRATORS, ObstacleSpec, SceneError, Simulation, WindSpec
+from pvcloth import INTEGRATORS, InputError, ObstacleSpec, Simulation, WindSpec
 from pvcloth.physics.kernels import available, resolve_backend
 
 pytestmark = pytest.mark.skipif(not available(), reason="numba not installed")
@@ -64,7 +64,7 @@ def test_backend_choice_and_errors(monkeypatch):
     assert resolve_backend("numpy") == "numpy"
     monkeypatch.setenv("PVCLOTH_BACKEND", "numpy")
     assert not Simulation(small_scene(4)).model.compiled
-    with pytest.raises(SceneError, match="numba, numpy"):
+    with pytest.raises(InputError, match="numba, numpy"):
         resolve_backend("cuda")
 
 

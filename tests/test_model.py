@@ -9,7 +9,7 @@ import pytest
 import pvcloth
 from conftest import free_cloth, small_scene
 from pvcloth import PinSpec, SpringsSpec, build_model
-from pvcloth.physics.forces import Springs
+from pvcloth.physics.springs import Springs
 
 
 def test_model_builds_only_the_terms_the_scene_needs():

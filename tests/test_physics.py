@@ -10,8 +10,8 @@ from scipy.optimize import minimize
 import pvcloth
 from conftest import free_cloth, small_scene
 from pvcloth import Control, DivergenceError, PinSpec, Simulation, State, get_integrator
-from pvcloth.physics.forces import Springs
 from pvcloth.physics.model import Model
+from pvcloth.physics.springs import Springs
 
 # -- two particles and one spring ---------------------------------------------
 

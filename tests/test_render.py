@@ -24,7 +24,7 @@ def test_grid_point_k_is_solver_point_k():
     from pvcloth.visual.view import cloth_grid
 
     sim = Simulation(small_scene(5).replace(cloth=pvcloth.ClothSpec(resolution=(5, 3))))
-    grid = cloth_grid(sim.positions, sim.shape)
+    grid = cloth_grid(sim.positions, sim.resolution)
     np.testing.assert_array_equal(grid.points, sim.positions)
     # structured (i, j) indexing agrees with the flat order i + nx * j
     assert grid.dimensions == (5, 3, 1)
@@ -60,7 +60,7 @@ def test_cloth_pixels_are_where_the_camera_projects_the_cloth(tmp_path):
     image = plotter.screenshot(return_img=True)
     renderer = plotter.renderer
     mask = cloth_pixels(image)
-    nx, ny = sim.shape
+    nx, ny = sim.resolution
     hits = 0
     for i, j in [(nx // 2, ny // 2), (nx // 4, ny // 3), (3 * nx // 4, 2 * ny // 3)]:
         renderer.SetWorldPoint(*sim.positions[i + nx * j], 1.0)

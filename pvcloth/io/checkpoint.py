@@ -1,29 +1,44 @@
 """Save a simulation to one file and resume it exactly.
 
 A checkpoint is a NumPy ``.npz`` archive (zip with CRC checks) holding a
-format tag, the scene as JSON, the integrator and step, positions,
-velocities, the clock, pins and their targets, and the integrator's own
-state (implicit Euler's warm start), so a resumed run repeats the
-uninterrupted one bit for bit. Writing goes to a temporary file renamed into
-place, so a crash mid-write leaves the previous checkpoint intact.
+format tag, the scene as it runs (live edits included: stiffness, wind,
+integrator, the step asked for and the stability policy) as JSON, the step
+being taken, the stiffness scale, the backend, positions, velocities, the clock, pins and
+their targets, and the integrator's own state (implicit Euler's warm start),
+so a resumed run repeats the uninterrupted one bit for bit. Writing goes to
+a temporary file renamed into place, so a crash mid-write leaves the
+previous checkpoint intact.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import zipfile
 from pathlib import Path
 
 import numpy as np
 
 from pvcloth.errors import CheckpointError, PvclothError
-from pvcloth.io.timeseries import atomic_write
+from pvcloth.io.files import atomic_write
+from pvcloth.physics.integrators import INTEGRATORS
+from pvcloth.physics.simulation import (
+    MAX_STEPS,
+    MAX_STIFFNESS_SCALE,
+    MIN_STIFFNESS_SCALE,
+    SPEED_LIMIT,
+    Simulation,
+)
+from pvcloth.physics.state import State
+from pvcloth.scene.spec import MAX_LENGTH, Scene
 
 TAG = "pvcloth-checkpoint"
-VERSION = 1
+VERSION = 2
+#: Versions this pvcloth reads (1 had no stiffness scale).
+READABLE = (1, 2)
 
 
-def save_checkpoint(sim, path) -> Path:
+def save_checkpoint(sim: Simulation, path: str | os.PathLike) -> Path:
     """Write the whole simulation state to ``path`` (``.npz``), atomically.
 
     Examples
@@ -49,11 +64,13 @@ def save_checkpoint(sim, path) -> Path:
         scene=np.array(json.dumps(sim.scene.to_dict())),
         integrator=np.array(sim.integrator.name),
         dt=np.array(sim.dt),
+        stiffness_scale=np.array(sim.stiffness_scale),
+        backend=np.array(sim.model.backend),
         x=sim.state.x,
         v=sim.state.v,
         t=np.array(sim.state.t),
         steps=np.array(sim.steps),
-        owed=np.array(sim._owed),
+        owed=np.array(sim.owed),
         pinned=sim.control.pinned,
         targets=sim.control.targets,
         **extra,
@@ -67,7 +84,7 @@ def save_checkpoint(sim, path) -> Path:
     return path
 
 
-def load_checkpoint(path):
+def load_checkpoint(path: str | os.PathLike) -> Simulation:
     """Rebuild the simulation saved in ``path``.
 
     Every entry is checked before use: its type, shape and range, and that
@@ -123,17 +140,14 @@ def _scalar(data, key, path, kind, low, high):
     return value
 
 
-def _rebuild(data: dict, path: Path):
-    from pvcloth.physics.integrators import INTEGRATORS
-    from pvcloth.physics.simulation import MAX_STEPS, SPEED_LIMIT, Simulation
-    from pvcloth.scene.spec import MAX_LENGTH, Scene
-
+def _rebuild(data: dict, path: Path) -> Simulation:
     if str(data.get("tag", "")) != TAG:
         raise CheckpointError(f"{path} is not a pvcloth checkpoint (no {TAG!r} tag)")
     version = _entry(data, "version", path, "iu", ()).item()
-    if version != VERSION:
+    if version not in READABLE:
         raise CheckpointError(
-            f"{path} has checkpoint version {version}; this pvcloth reads version {VERSION}"
+            f"{path} has checkpoint version {version}; this pvcloth reads versions "
+            f"{', '.join(map(str, READABLE))}"
         )
     try:
         scene = Scene.from_dict(json.loads(str(_entry(data, "scene", path, "U", ()))))
@@ -142,9 +156,17 @@ def _rebuild(data: dict, path: Path):
     integrator = str(_entry(data, "integrator", path, "U", ()))
     if integrator not in INTEGRATORS:
         raise CheckpointError(f"{path}: unknown integrator {integrator!r}")
+    # Version 1 saved the integrator beside the scene, not in it.
+    scene = scene.with_overrides({"solver.integrator": integrator})
     dt = _scalar(data, "dt", path, "f", 1e-300, 10.0)
-    sim = Simulation(scene, integrator=integrator, dt=dt, stability="ignore")
-    n = sim.model.n_points
+    scale, backend = 1.0, None  # version 1 resumed on the default backend
+    if version >= 2:
+        backend = str(_entry(data, "backend", path, "U", ()))
+        scale = _scalar(
+            data, "stiffness_scale", path, "f", MIN_STIFFNESS_SCALE, MAX_STIFFNESS_SCALE
+        )
+    nx, ny = scene.cloth.resolution
+    n = nx * ny
     x = _entry(data, "x", path, "f", (n, 3))
     v = _entry(data, "v", path, "f", (n, 3))
     targets = _entry(data, "targets", path, "f", (n, 3))
@@ -165,14 +187,15 @@ def _rebuild(data: dict, path: Path):
             if values.ndim != 1 or values.size > 3 * n:  # one value per free coordinate
                 raise CheckpointError(f"{path}: {key!r} has shape {values.shape}")
             extra[key[len(prefix) :]] = values
-    sim.state.x[:] = x
-    sim.state.v[:] = v
-    sim.state.t = float(t)
-    sim.steps = int(steps)
-    sim._owed = float(owed)
-    sim.control.pinned[:] = pinned
-    sim.control.targets[:] = targets
-    sim.control.refresh(sim.model)
-    sim.integrator.set_state(extra)
-    sim.update_mesh()
-    return sim
+    return Simulation.resumed(
+        scene,
+        dt=float(dt),
+        stiffness_scale=float(scale),
+        backend=backend,
+        state=State(x, v, float(t)),
+        steps=int(steps),
+        owed=float(owed),
+        pinned=pinned,
+        targets=targets,
+        integrator_state=extra,
+    )

@@ -24,74 +24,34 @@ A re-export replaces the whole ``OUT_frames/`` folder, old frames and all.
 from __future__ import annotations
 
 import contextlib
-import glob
 import os
 import shutil
-import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 from xml.sax.saxutils import quoteattr
 
 import meshio
 import numpy as np
 
-from pvcloth.errors import ExportInterrupted, SceneError
+from pvcloth.errors import ExportInterrupted, InputError
+from pvcloth.io.files import remove_orphaned_temporaries
+from pvcloth.progress import frame_bar
 from pvcloth.signals import deferred
+
+if TYPE_CHECKING:  # for annotations only
+    from pvcloth.physics.simulation import Simulation
 
 FORMATS = (".pvd", ".xdmf", ".obj")
 
 
-def quads(shape: tuple[int, int]) -> np.ndarray:
+def quads(resolution: tuple[int, int]) -> np.ndarray:
     """Quadrilateral cells ``(M, 4)`` of a grid of ``(nx, ny)`` points, in
     VTK point order, counter-clockwise seen from +normal."""
-    nx, ny = shape
+    nx, ny = resolution
     index = np.arange(nx * ny).reshape(ny, nx)
     return np.stack(
         [index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]], axis=-1
     ).reshape(-1, 4)
-
-
-def atomic_write(path: Path, write) -> None:
-    """Call ``write(temporary_path)`` and rename the result onto ``path``.
-
-    The temporary file is hidden beside ``path`` and named with this
-    process's id; temporaries left there by a process that died (a killed
-    save) are removed first, so they do not pile up."""
-    remove_orphaned_temporaries(path)
-    handle, temporary = tempfile.mkstemp(
-        dir=path.parent, prefix=f".{path.stem}.{os.getpid()}.", suffix=path.suffix
-    )
-    os.close(handle)
-    try:
-        write(temporary)
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
-
-
-def remove_orphaned_temporaries(path: Path) -> list[Path]:
-    """Delete the hidden temporaries of ``path`` (``.STEM.PID.*SUFFIX``) whose
-    writing process no longer runs; return what was deleted."""
-    removed = []
-    for candidate in path.parent.glob(f".{glob.escape(path.stem)}.*{glob.escape(path.suffix)}"):
-        pid = candidate.name[len(path.stem) + 2 :].split(".", 1)[0]
-        if pid.isdigit() and not _running(int(pid)):
-            if candidate.is_dir():  # an export's staging folder
-                shutil.rmtree(candidate, ignore_errors=True)
-            else:
-                candidate.unlink(missing_ok=True)
-            removed.append(candidate)
-    return removed
-
-
-def _running(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # someone else's process: alive
-        return True
-    return True
 
 
 def _pvd_index(entries: list[tuple[float, str]]) -> str:
@@ -105,7 +65,14 @@ def _pvd_index(entries: list[tuple[float, str]]) -> str:
     )
 
 
-def export(sim, output, *, frames: int = 60, fps: float = 30.0, progress: bool = True) -> Path:
+def export(
+    sim: Simulation,
+    output: str | os.PathLike,
+    *,
+    frames: int = 60,
+    fps: float = 30.0,
+    progress: bool = True,
+) -> Path:
     """Simulate ``frames`` frames and write them as a time series.
 
     Parameters
@@ -143,22 +110,16 @@ def export(sim, output, *, frames: int = 60, fps: float = 30.0, progress: bool =
     >>> len(reader.time_values), round(reader.time_values[-1], 3)
     (10, 0.3)
     """
-    from tqdm.auto import tqdm
-
     path = Path(output)
     suffix = path.suffix.lower()
     if suffix not in FORMATS:
-        raise SceneError("output", f"unknown extension {path.suffix!r}; use one of {FORMATS}")
-    if isinstance(frames, bool) or not isinstance(frames, int) or frames < 1:
-        raise SceneError("frames", f"must be a whole number of at least 1, got {frames!r}")
-    if not (isinstance(fps, (int, float)) and 0 < fps <= 1000):
-        raise SceneError("fps", f"must be a number in (0, 1000], got {fps!r}")
-    sim.check_run_length(frames / fps)  # refused before any work, not after hours
+        raise InputError("output", f"unknown extension {path.suffix!r}; use one of {FORMATS}")
+    frame_numbers = sim.frames(frames, fps)  # checked now, before any file is touched
     path.parent.mkdir(parents=True, exist_ok=True)
-    cells = [("quad", quads(sim.shape))]
+    cells = [("quad", quads(sim.resolution))]
     rest = sim.model.rest_positions
     done = 0
-    bar = tqdm(range(frames), desc=f"exporting {path.name}", unit="frame", disable=not progress)
+    bar = frame_bar(frame_numbers, frames, f"exporting {path.name}", enabled=progress)
     # Everything is written into a hidden staging folder beside the output
     # and moved into place when the writing stops (finished or interrupted),
     # so a run killed midway leaves an earlier export at this path as it was;
@@ -177,9 +138,7 @@ def export(sim, output, *, frames: int = 60, fps: float = 30.0, progress: bool =
                 writer = meshio.xdmf.TimeSeriesWriter(path.name).__enter__()
                 try:
                     writer.write_points_cells(rest, cells)
-                    for n in bar:
-                        if n:
-                            sim.advance(1.0 / fps)
+                    for _ in bar:
                         with deferred():  # a frame is written whole
                             writer.write_data(
                                 sim.time,
@@ -195,8 +154,6 @@ def export(sim, output, *, frames: int = 60, fps: float = 30.0, progress: bool =
             return path
         (staging / folder).mkdir()
         for n in bar:
-            if n:
-                sim.advance(1.0 / fps)
             name = f"{path.stem}_{n:05d}" + (".vtu" if suffix == ".pvd" else ".obj")
             mesh = meshio.Mesh(
                 np.array(sim.positions),

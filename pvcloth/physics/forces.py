@@ -1,8 +1,8 @@
 """Force terms. Each adds its forces into a shared ``(N, 3)`` array.
 
 A term is a small object with one job. The model holds only the terms its
-scene asks for, so a scene without, say, bending springs never pays for them.
-Every term offers:
+scene asks for, so a scene without, say, wind never pays for it. The springs
+are in :mod:`pvcloth.physics.springs`. Every term offers:
 
 ``accumulate(x, v, f)``
     add its forces at positions ``x`` and velocities ``v`` into ``f`` (in place);
@@ -16,15 +16,14 @@ Every term offers:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
-from pvcloth.physics.grid import SPRING_OFFSETS, border_factor, pair_slices
-
-#: Lengths below this count as zero: a spring between coincident points has
-#: no direction, so it exerts no force instead of producing NaN.
+#: Lengths below this count as zero: a spring between coincident points (or
+#: a triangle of no area) has no direction, so it exerts no force instead of
+#: producing NaN.
 TINY_LENGTH = 1e-12
 
 
@@ -72,171 +71,6 @@ class AirDamping:
 
 
 @dataclass
-class _SpringGroup:
-    """All springs of one grid offset: slices of both ends and constants."""
-
-    a: tuple[slice, slice]
-    b: tuple[slice, slice]
-    rest: np.ndarray  # rest lengths, shape of the slice
-    stiffness: np.ndarray  # k per spring (N/m)
-    damping: np.ndarray  # c per spring (N s/m)
-    ia: np.ndarray  # flat index of end a, per spring
-    ib: np.ndarray
-
-
-@dataclass
-class Springs:
-    """One family of Hooke springs with dashpots over the grid.
-
-    The force on end ``a`` of a spring from ``a`` to ``b`` is
-    ``k (L - L0) u + c ((v_b - v_a) . u) u`` with ``L = |x_b - x_a|`` and
-    ``u = (x_b - x_a) / L``: a stretched spring pulls its ends together.
-    End ``b`` gets the opposite force, so internal forces sum to zero.
-    Every group of springs is a pair of strided views of the position array:
-    no Python loop over springs and no scatter-add.
-
-    Parameters
-    ----------
-    family : str
-        ``"structural"``, ``"shear"`` or ``"bending"``.
-    positions : ndarray, shape (ny, nx, 3)
-        Rest configuration; rest lengths are taken from it.
-    stiffness, damping : float
-        Per-cloth constants of the family (see :mod:`pvcloth.scene`).
-    spacing : (float, float)
-        Grid spacing ``(hx, hy)`` in metres.
-    """
-
-    family: str
-    shape: tuple[int, int]  # (ny, nx)
-    groups: list[_SpringGroup] = field(default_factory=list)
-    name: str = "springs"
-    _pattern: BlockPattern | None = field(default=None, repr=False, compare=False)
-
-    @classmethod
-    def build(cls, family, positions, stiffness, damping, spacing) -> Springs:
-        ny, nx, _ = positions.shape
-        hx, hy = spacing
-        index = np.arange(nx * ny).reshape(ny, nx)
-        groups = []
-        for di, dj in SPRING_OFFSETS[family]:
-            if di >= nx or abs(dj) >= ny:
-                continue  # grid too small for this offset
-            a, b = pair_slices((di, dj), (ny, nx))
-            rest = np.linalg.norm(positions[b] - positions[a], axis=-1)
-            # Springs along x stand for a strip hy wide and hx long (and vice
-            # versa), which makes the sheet stiffness independent of the grid.
-            if dj == 0:
-                scale = hy / hx
-            elif di == 0:
-                scale = hx / hy
-            else:
-                scale = 1.0
-            share = scale * border_factor((di, dj), (ny, nx))
-            groups.append(
-                _SpringGroup(
-                    a,
-                    b,
-                    rest,
-                    stiffness * share,
-                    damping * share,
-                    index[a].ravel(),
-                    index[b].ravel(),
-                )
-            )
-        return cls(family=family, shape=(ny, nx), groups=groups, name=f"{family} springs")
-
-    @property
-    def count(self) -> int:
-        """Number of springs in this family."""
-        return sum(g.rest.size for g in self.groups)
-
-    @property
-    def damped(self) -> bool:
-        return any(np.any(g.damping) for g in self.groups)
-
-    def accumulate(self, x, v, f) -> None:
-        # (N, 3) -> (ny, nx, 3) views: the arrays are C-contiguous, no copy.
-        x3, v3, f3 = (arr.reshape(self.shape + (3,)) for arr in (x, v, f))
-        damped = self.damped
-        for g in self.groups:
-            d = x3[g.b] - x3[g.a]
-            length = np.sqrt(np.einsum("...k,...k->...", d, d))
-            d /= np.maximum(length, TINY_LENGTH)[..., None]  # d is now u
-            magnitude = g.stiffness * (length - g.rest)
-            if damped:
-                magnitude += g.damping * np.einsum("...k,...k->...", v3[g.b] - v3[g.a], d)
-            d *= magnitude[..., None]
-            f3[g.a] += d
-            f3[g.b] -= d
-
-    def potential_energy(self, x) -> float:
-        x3 = x.reshape(self.shape + (3,))
-        total = 0.0
-        for g in self.groups:
-            length = np.linalg.norm(x3[g.b] - x3[g.a], axis=-1)
-            total += 0.5 * float(np.sum(g.stiffness * (length - g.rest) ** 2))
-        return total
-
-    def jacobians(self, x, v):
-        """Force Jacobians. The transverse (geometric) stiffness is clamped
-        at zero for compressed springs, as Choi and Ko (2002) do, so that
-        ``-dF/dx`` stays positive semi-definite."""
-        ia = np.concatenate([g.ia for g in self.groups])
-        ib = np.concatenate([g.ib for g in self.groups])
-        k = np.concatenate([g.stiffness.ravel() for g in self.groups])
-        c = np.concatenate([g.damping.ravel() for g in self.groups])
-        rest = np.concatenate([g.rest.ravel() for g in self.groups])
-        d = x[ib] - x[ia]
-        length = np.linalg.norm(d, axis=1)
-        u = d / np.maximum(length, TINY_LENGTH)[:, None]
-        uu = u[:, :, None] * u[:, None, :]
-        transverse = np.clip(1.0 - rest / np.maximum(length, TINY_LENGTH), 0.0, None)
-        eye = np.eye(3)[None]
-        stiff = k[:, None, None] * (uu + transverse[:, None, None] * (eye - uu))
-        if self._pattern is None:  # the springs never change: neither does the pattern
-            self._pattern = BlockPattern(ia, ib, x.shape[0])
-        dfdx = self._pattern.assemble(stiff)
-        dfdv = self._pattern.assemble(c[:, None, None] * uu) if self.damped else None
-        return dfdx, dfdv
-
-    def describe(self) -> str:
-        k = max(float(g.stiffness.max()) for g in self.groups) if self.groups else 0.0
-        return f"{self.name}: {self.count} springs, k up to {k:g} N/m"
-
-
-class BlockPattern:
-    """The sparsity pattern of ``dF/dx``-shaped matrices of two-point
-    interactions, computed once: every later assembly is one ``bincount``
-    into the CSR arrays instead of a COO-to-CSR conversion with sorting.
-
-    Each 3x3 ``block`` is ``dF_a/dx_b``; the four blocks of a pair are
-    ``(a,a) = -B, (a,b) = B, (b,a) = B, (b,b) = -B``.
-    """
-
-    def __init__(self, ia, ib, n_points: int):
-        rows3 = np.arange(3)
-        size = 3 * n_points
-        keys = []
-        for p, q in ((ia, ia), (ia, ib), (ib, ia), (ib, ib)):
-            r = 3 * p[:, None, None] + rows3[None, :, None]
-            c = 3 * q[:, None, None] + rows3[None, None, :]
-            keys.append((r * size + c).ravel())
-        unique, self.slot = np.unique(np.concatenate(keys), return_inverse=True)
-        self.indices = (unique % size).astype(np.int32)
-        self.indptr = np.searchsorted(unique // size, np.arange(size + 1)).astype(np.int32)
-        self.shape = (size, size)
-        self.pairs = ia.size
-
-    def assemble(self, blocks: np.ndarray) -> sp.csr_matrix:
-        """The matrix for per-pair ``blocks`` of shape ``(pairs, 3, 3)``."""
-        b = blocks.reshape(self.pairs, 9)
-        values = np.concatenate([-b, b, b, -b]).ravel()
-        data = np.bincount(self.slot, weights=values, minlength=self.indices.size)
-        return sp.csr_matrix((data, self.indices, self.indptr), shape=self.shape)
-
-
-@dataclass
 class Wind:
     """Aerodynamic drag and lift of (possibly gusty) wind on each triangle.
 
@@ -276,7 +110,7 @@ class Wind:
 
     @classmethod
     def from_spec(cls, spec, shape) -> Wind:
-        """The term a :class:`~pvcloth.scene.WindSpec` describes."""
+        """The term a :class:`~pvcloth.WindSpec` describes."""
         return cls(
             np.asarray(spec.velocity, dtype=float),
             spec.drag,

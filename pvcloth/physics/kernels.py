@@ -37,6 +37,10 @@ import types
 
 import numpy as np
 
+from pvcloth.errors import InputError
+from pvcloth.scene.validation import choice
+from pvcloth.signals import deferred
+
 try:  # numba is a dependency, but the NumPy path must work without it
     import numba
     from numba import njit, prange
@@ -79,17 +83,13 @@ def available() -> bool:
 def resolve_backend(backend: str | None) -> str:
     """``"numba"`` or ``"numpy"``: what ``backend`` (or ``PVCLOTH_BACKEND``) asks
     for, with ``"auto"`` choosing numba when it is installed."""
-    from pvcloth.scene.validation import choice
-
     if backend is None:
         backend = os.environ.get("PVCLOTH_BACKEND", "auto")
-    backend = choice("backend", backend, BACKENDS)
+    backend = choice("backend", backend, BACKENDS, error=InputError)
     if backend == "auto":
         return "numba" if available() else "numpy"
     if backend == "numba" and not available():
-        from pvcloth.errors import SceneError
-
-        raise SceneError("backend", "'numba' was asked for but numba is not installed")
+        raise InputError("backend", "'numba' was asked for but numba is not installed")
     return backend
 
 
@@ -99,8 +99,8 @@ class SpringPlan:
     (the group's own array in the top-left corner), and where each group's
     end a starts and how far end b is from it.
 
-    These are copies: after changing a group's arrays (as
-    :meth:`pvcloth.Simulation.scale_stiffness` does), call :meth:`refresh`.
+    These are copies, refreshed by :meth:`pvcloth.physics.model.Model.apply`
+    (the one way constants change) through :meth:`refresh`.
     """
 
     def __init__(self, springs, shape):
@@ -325,8 +325,6 @@ class _Warming:
         self.kernel = kernel
 
     def __call__(self, *args):
-        from pvcloth.signals import deferred
-
         with deferred():
             result = self.kernel(*args)
         _WARM.add(self.kernel)

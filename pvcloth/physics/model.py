@@ -1,6 +1,6 @@
 """The model: everything about a cloth that does not change while it moves.
 
-:func:`build_model` turns a :class:`~pvcloth.scene.Scene` into a
+:func:`build_model` turns a :class:`~pvcloth.Scene` into a
 :class:`Model` holding the grid, the masses, the default pins and exactly the
 force terms the scene asks for, nothing more.
 """
@@ -10,11 +10,19 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 
-from pvcloth.physics.forces import AirDamping, Gravity, Springs, Wind
+from pvcloth.physics.forces import AirDamping, Gravity, Wind
 from pvcloth.physics.grid import initial_positions, lumped_masses
-from pvcloth.physics.kernels import resolve_backend
+from pvcloth.physics.kernels import (
+    SpringPlan,
+    body_forces,
+    kick_drift,
+    resolve_backend,
+    spring_forces,
+)
 from pvcloth.physics.obstacles import build_obstacle
+from pvcloth.physics.springs import Springs, SpringTable
 
 
 @dataclass
@@ -24,43 +32,64 @@ class Model:
     Attributes
     ----------
     shape : (int, int)
-        ``(ny, nx)``: rows along the height, points per row.
+        ``(ny, nx)``: rows along the height, points per row (NumPy's order;
+        :attr:`pvcloth.Simulation.shape` and the mesh give ``(nx, ny)``).
     rest_positions : ndarray, shape (N, 3)
-        Initial positions, in VTK point order (index ``i + nx * j``).
+        Initial positions in metres, in VTK point order (index ``i + nx * j``).
     mass : ndarray, shape (N,)
         Point masses in kg.
     pinned : ndarray of bool, shape (N,)
         Points pinned by the scene.
-    forces : list
-        Force terms (see :mod:`pvcloth.physics.forces`), only those the scene needs.
+    springs : list of Springs
+        The spring families the scene asks for (see :mod:`pvcloth.physics.springs`).
+    gravity : Gravity or None
+    air : AirDamping or None
+    wind : Wind or None
+        The other force terms (:mod:`pvcloth.physics.forces`), each ``None``
+        when the scene has none of it.
     obstacles : list
-        Rigid obstacles (see :mod:`pvcloth.physics.obstacles`); empty if the scene
-        has none, and then no collision code runs.
+        Rigid obstacles (see :mod:`pvcloth.physics.obstacles`); empty if the
+        scene has none, and then no collision code runs.
+    backend : {"numba", "numpy"}
+        Where spring forces and the semi-implicit update are computed.
+    revision : int
+        Counts the changes of constants (:meth:`apply`): integrators that
+        cache factorisations of them compare it.
     """
 
     shape: tuple[int, int]
     rest_positions: np.ndarray
     mass: np.ndarray
     pinned: np.ndarray
-    forces: list = field(default_factory=list)
+    springs: list[Springs] = field(default_factory=list)
+    gravity: Gravity | None = None
+    air: AirDamping | None = None
+    wind: Wind | None = None
     obstacles: list = field(default_factory=list)
     backend: str = "numpy"
 
     def __post_init__(self):
-        self._plan = None
-        if self.backend == "numba":
-            from pvcloth.physics.kernels import SpringPlan
-
-            self._plan = SpringPlan(self.springs, self.shape)
+        self.revision = 0
+        self._plan = SpringPlan(self.springs, self.shape) if self.backend == "numba" else None
 
     @property
     def n_points(self) -> int:
         return self.mass.size
 
     @property
-    def springs(self) -> list[Springs]:
-        """The spring families that were built."""
-        return [term for term in self.forces if isinstance(term, Springs)]
+    def forces(self) -> list:
+        """Every force term, springs first."""
+        others = [self.gravity, self.air, self.wind]
+        return [*self.springs, *(term for term in others if term is not None)]
+
+    @property
+    def other_forces(self) -> list:
+        """The force terms that are not springs (gravity, air damping, wind)."""
+        return [term for term in (self.gravity, self.air, self.wind) if term is not None]
+
+    def spring_table(self) -> SpringTable:
+        """Every spring of every family as one flat table."""
+        return SpringTable.join([family.table() for family in self.springs])
 
     @property
     def compiled(self) -> bool:
@@ -68,10 +97,18 @@ class Model:
         return self._plan is not None
 
     def compute_forces(self, x: np.ndarray, v: np.ndarray, out: np.ndarray | None = None):
-        """Total force ``(N, 3)`` on every point (pins included)."""
+        """Total force ``(N, 3)`` in newtons on every point (pins included)
+        at positions ``x`` (m) and velocities ``v`` (m/s)."""
         if self._plan is not None:
             f = np.empty_like(x) if out is None else out
-            self._compiled_forces(x, v, f)
+            # Gravity and air damping are written over f, the springs add on
+            # in compiled kernels, the wind in NumPy.
+            gravity = self.gravity.acceleration if self.gravity is not None else _NO_GRAVITY
+            air = self.air.rate if self.air is not None else 0.0
+            body_forces(v, f, self.mass, gravity, air, self.shape)
+            spring_forces(self._plan, x, v, f)
+            if self.wind is not None:
+                self.wind.accumulate(x, v, f)
             return f
         f = np.zeros_like(x) if out is None else out
         if out is not None:
@@ -80,34 +117,39 @@ class Model:
             term.accumulate(x, v, f)
         return f
 
-    def _compiled_forces(self, x, v, f) -> None:
-        """Gravity and air damping (written over ``f``) and springs in
-        compiled kernels; any other term (wind) adds on in NumPy."""
-        from pvcloth.physics.kernels import body_forces, spring_forces
+    def kick_drift(self, x, v, f, inv_mass, dt: float, x_out, v_out) -> tuple[float, bool] | None:
+        """The semi-implicit Euler update ``v' = v + dt f / m``, ``x' = x +
+        dt v'`` into ``x_out, v_out`` (all ``(N, 3)``; ``inv_mass`` ``(N,)``
+        in 1/kg). Compiled, it also returns the largest speed and whether
+        every new value is finite (found on the way); NumPy returns None
+        and leaves ``f`` scaled to accelerations."""
+        if self._plan is not None:
+            return kick_drift(x, v, f, inv_mass, dt, x_out, v_out, self.shape)
+        f *= inv_mass[:, None]
+        np.multiply(f, dt, out=v_out)
+        v_out += v
+        np.multiply(v_out, dt, out=x_out)
+        x_out += x
+        return None
 
-        gravity, air = np.zeros(3), 0.0
-        for term in self.forces:
-            if isinstance(term, Gravity):
-                gravity = gravity + term.acceleration
-            elif isinstance(term, AirDamping):
-                air += term.rate
-        body_forces(v, f, self.mass, gravity, air, self.shape)
-        spring_forces(self._plan, x, v, f)
-        for term in self.forces:
-            if not isinstance(term, (Springs, Gravity, AirDamping)):
-                term.accumulate(x, v, f)
-
-    def refresh(self) -> None:
-        """Call after changing spring constants in place (the compiled
-        kernels hold copies)."""
+    def apply(self, scene) -> None:
+        """Take the constants a (live-edited) scene gives: spring stiffness
+        and damping, gravity, air damping, wind. The terms are derived as
+        :func:`build_model` derives them, so this model and one built from
+        ``scene`` hold the same numbers. The grid, the masses and which
+        spring families exist do not change (the caller checks)."""
+        for springs in self.springs:
+            spec = getattr(scene.springs, springs.family)
+            springs.set_constants(spec.stiffness, spec.damping)
+        self.gravity, self.air, self.wind = _body_terms(scene, self.mass, self.shape)
         if self._plan is not None:
             self._plan.refresh()
+        self.revision += 1
 
     def set_time(self, t: float) -> None:
         """Tell time-dependent terms (gusty wind) the time of the coming step."""
-        for term in self.forces:
-            if hasattr(term, "set_time"):
-                term.set_time(t)
+        if self.wind is not None:
+            self.wind.set_time(t)
 
     def collide(self, x0, x1, v1, movable, t0: float, t1: float) -> int:
         """Resolve collisions of the step ``t0 -> t1`` in place on ``x1``, ``v1``
@@ -123,15 +165,15 @@ class Model:
         return touched
 
     def potential_energy(self, x: np.ndarray) -> float:
+        """Stored energy in joules (springs and gravity)."""
         return sum(term.potential_energy(x) for term in self.forces)
 
     def kinetic_energy(self, v: np.ndarray) -> float:
+        """Kinetic energy in joules."""
         return 0.5 * float(self.mass @ np.einsum("ij,ij->i", v, v))
 
     def jacobians(self, x: np.ndarray, v: np.ndarray):
         """Sum of the terms' ``(dF/dx, dF/dv)`` as sparse ``(3N, 3N)`` matrices."""
-        import scipy.sparse as sp
-
         size = 3 * self.n_points
         dfdx = sp.csr_matrix((size, size))
         dfdv = sp.csr_matrix((size, size))
@@ -142,6 +184,19 @@ class Model:
             if jv is not None:
                 dfdv = dfdv + jv
         return dfdx, dfdv
+
+
+_NO_GRAVITY = np.zeros(3)
+
+
+def _body_terms(scene, mass: np.ndarray, shape: tuple[int, int]):
+    """``(gravity, air damping, wind)`` terms for ``scene``, ``None`` where
+    it has none."""
+    gravity = Gravity(np.asarray(scene.gravity, dtype=float), mass) if any(scene.gravity) else None
+    air = AirDamping(scene.air_damping, mass) if scene.air_damping > 0 else None
+    wind = scene.wind
+    blows = wind is not None and (wind.drag > 0 or wind.lift > 0)
+    return gravity, air, Wind.from_spec(wind, shape) if blows else None
 
 
 def pinned_mask(scene) -> np.ndarray:
@@ -199,28 +254,24 @@ def build_model(scene, backend: str | None = None) -> Model:
     x = initial_positions(cloth)
     mass = lumped_masses(cloth).ravel()
     spacing = (cloth.size[0] / (nx - 1), cloth.size[1] / (ny - 1))
-    forces: list = []
+    springs = []
     for family in ("structural", "shear", "bending"):
         spec = getattr(scene.springs, family)
         if spec is None:
             continue
         term = Springs.build(family, x, spec.stiffness, spec.damping, spacing)
         if term.count:
-            forces.append(term)
-    if any(scene.gravity):
-        forces.append(Gravity(np.asarray(scene.gravity, dtype=float), mass))
-    if scene.air_damping > 0:
-        forces.append(AirDamping(scene.air_damping, mass))
-    if scene.wind is not None and (scene.wind.drag > 0 or scene.wind.lift > 0):
-        w = scene.wind
-        forces.append(Wind.from_spec(w, (ny, nx)))
-    obstacles = [build_obstacle(spec) for spec in scene.obstacles]
+            springs.append(term)
+    gravity, air, wind = _body_terms(scene, mass, (ny, nx))
     return Model(
         (ny, nx),
         x.reshape(-1, 3).copy(),
         mass,
         pinned_mask(scene),
-        forces,
-        obstacles,
+        springs,
+        gravity,
+        air,
+        wind,
+        [build_obstacle(spec) for spec in scene.obstacles],
         resolve_backend(backend),
     )

@@ -333,7 +333,7 @@ class Ground(Obstacle):
 
 
 def build_obstacle(spec) -> Obstacle:
-    """The obstacle an :class:`~pvcloth.scene.ObstacleSpec` describes."""
+    """The obstacle an :class:`~pvcloth.ObstacleSpec` describes."""
     common = dict(
         center=spec.center,
         thickness=spec.thickness,

@@ -2,17 +2,27 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import sys
+from collections.abc import Iterator, Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from pvcloth.errors import DivergenceError, SceneError
+from pvcloth.errors import DivergenceError, InputError, SceneError
 from pvcloth.physics.integrators import get_integrator
 from pvcloth.physics.model import build_model
 from pvcloth.physics.state import Control, State
-from pvcloth.scene.spec import MAX_LENGTH, STABILITY_POLICIES, Scene, load_scene
+from pvcloth.scene.spec import (
+    MAX_LENGTH,
+    STABILITY_POLICIES,
+    Scene,
+    WindSpec,
+    html_table,
+    load_scene,
+)
 from pvcloth.scene.validation import choice, integer, real
 
 #: No cloth point moves faster than this (m/s) unless the solver blew up.
@@ -28,6 +38,8 @@ SAFE_SHARE = 0.5
 FRAME_DT = 1.0 / 60.0
 #: How far ``Simulation.scale_stiffness`` may take the springs from the scene's.
 MIN_STIFFNESS_SCALE, MAX_STIFFNESS_SCALE = 1e-6, 1e6
+#: Top-level scene keys that may change during a run (:meth:`Simulation.update`).
+LIVE_KEYS = ("springs", "gravity", "air_damping", "wind", "solver")
 #: Most steps one call may take: hours of wall time even for a tiny cloth.
 MAX_STEPS = 10**7
 #: Peak bytes per cloth point while a simulation is built: the stable-step
@@ -85,22 +97,27 @@ class Simulation:
         backend: str | None = None,
     ):
         if not isinstance(scene, Scene):
-            raise SceneError("scene", f"expected a pvcloth.Scene, got {type(scene).__name__}")
+            raise InputError("scene", f"expected a pvcloth.Scene, got {type(scene).__name__}")
+        # The overrides become part of the scene: sim.scene is what runs.
+        given = {"solver.integrator": integrator, "solver.dt": dt, "solver.stability": stability}
+        scene = scene.with_overrides({k: v for k, v in given.items() if v is not None})
+        #: The scene being simulated, live edits (:meth:`update`) included:
+        #: its ``solver.dt`` is the step asked for (``None``: automatic),
+        #: ``dt`` the step taken (a substep of it, perhaps).
         self.scene = scene
-        #: Springs' stiffness and damping relative to the scene's (scale_stiffness).
+        #: Springs' stiffness and damping relative to the scene's at the start
+        #: (changed by :meth:`scale_stiffness`).
         self.stiffness_scale = 1.0
         _check_memory(scene)
         self.model = build_model(scene, backend)
-        self.integrator = get_integrator(integrator or scene.solver.integrator)
-        #: The step asked for (scene or override), or ``None`` for an automatic
-        #: one; ``dt`` is the step actually taken (a substep of it, perhaps).
-        self.requested_dt = (
-            scene.solver.dt if dt is None else real("dt", dt, minimum=0.0, exclusive=True)
-        )
+        self.integrator = get_integrator(scene.solver.integrator)
         self.reset()
-        policy = scene.solver.stability if stability is None else stability
-        policy = choice("stability", policy, STABILITY_POLICIES)
-        self.dt = self._checked_step(self.requested_dt, policy)
+        self.dt = self._checked_step(scene.solver.dt, scene.solver.stability)
+
+    @property
+    def requested_dt(self) -> float | None:
+        """The step asked for (``scene.solver.dt``), or ``None`` for an automatic one."""
+        return self.scene.solver.dt
 
     @property
     def dt_source(self) -> str:
@@ -161,8 +178,10 @@ class Simulation:
         x = self.model.rest_positions.copy()
         self.state = State(x, np.zeros_like(x), 0.0)
         self.control = Control.from_model(self.model)
+        #: Steps taken since the start.
         self.steps = 0
-        self._owed = 0.0  # simulated time asked for but not yet stepped
+        #: Simulated seconds asked for (by advance) but not yet stepped: less than dt.
+        self.owed = 0.0
         self._spare = None  # a replaced state the next step may reuse
         self.update_mesh()
 
@@ -234,7 +253,7 @@ class Simulation:
 
     def summary(self) -> list[tuple[str, str]]:
         """``(topic, text)`` rows: scene, size, clock, integrator and step, pins."""
-        nx, ny = self.shape
+        nx, ny = self.resolution
         origin = {"auto": "automatic", "given": "as given", "substep": "substep"}[self.dt_source]
         return [
             ("scene", self.scene.name),
@@ -245,16 +264,14 @@ class Simulation:
         ]
 
     def __repr__(self) -> str:
-        nx, ny = self.shape
+        nx, ny = self.resolution
         return (
             f"<Simulation {self.scene.name!r}: {nx} x {ny} points, t = {self.time:.6g} s "
             f"({self.steps} steps), {self.integrator.name} at dt = {self.dt:.4g} s>"
         )
 
     def _repr_html_(self) -> str:
-        from pvcloth.scene.spec import _html_table
-
-        return _html_table(f"Simulation {self.scene.name!r}", self.summary())
+        return html_table(f"Simulation {self.scene.name!r}", self.summary())
 
     # -- what viewers read -----------------------------------------------------
 
@@ -278,8 +295,10 @@ class Simulation:
         return view
 
     @property
-    def shape(self) -> tuple[int, int]:
-        """``(nx, ny)``: points along the width and the height."""
+    def resolution(self) -> tuple[int, int]:
+        """``(nx, ny)``: points along the width and the height, as in
+        ``scene.cloth.resolution`` and the mesh's dimensions (VTK's order;
+        ``model.shape`` is NumPy's ``(ny, nx)``)."""
         return self.model.shape[1], self.model.shape[0]
 
     def energy(self) -> dict[str, float]:
@@ -302,14 +321,14 @@ class Simulation:
 
     def point_index(self, point) -> int:
         """Flat index of a point given as an index or an ``(i, j)`` pair."""
-        nx, ny = self.shape
+        nx, ny = self.resolution
         if isinstance(point, (tuple, list)) and len(point) == 2:
-            i = integer("point[0] (i)", point[0], minimum=0, maximum=nx - 1)
-            j = integer("point[1] (j)", point[1], minimum=0, maximum=ny - 1)
+            i = integer("point[0] (i)", point[0], minimum=0, maximum=nx - 1, error=InputError)
+            j = integer("point[1] (j)", point[1], minimum=0, maximum=ny - 1, error=InputError)
             return i + nx * j
         if isinstance(point, (int, np.integer)) and not isinstance(point, bool):
-            return integer("point", point, minimum=0, maximum=nx * ny - 1)
-        raise SceneError(
+            return integer("point", point, minimum=0, maximum=nx * ny - 1, error=InputError)
+        raise InputError(
             "point",
             f"expected an index 0..{nx * ny - 1} or an (i, j) pair of whole numbers, got {point!r}",
         )
@@ -323,12 +342,12 @@ class Simulation:
         except (TypeError, ValueError, OverflowError):
             target = None
         if target is None or target.shape != (3,) or not np.isfinite(target).all():
-            raise SceneError(
+            raise InputError(
                 "position",
                 f"expected three finite coordinates (x, y, z) in metres, got {position!r}",
             )
         if np.abs(target).max() > MAX_LENGTH:
-            raise SceneError(
+            raise InputError(
                 "position", f"each coordinate must be within +-{MAX_LENGTH:g} m, got {position!r}"
             )
         return target
@@ -337,58 +356,129 @@ class Simulation:
         """Hold a point at ``position`` (default: where it is now)."""
         k = self.point_index(point)
         target = self.state.x[k] if position is None else self._target(position)
-        self.control.targets[k] = target
-        self.control.pinned[k] = True
-        self.control.refresh(self.model)
+        self.control.pin(k, target)
 
     def move_pin(self, point, position) -> None:
         """Set a pinned point's target; it gets there over the next advance."""
         k = self.point_index(point)
         if not self.control.pinned[k]:
-            raise SceneError("point", f"point {k} is not pinned; pin it first")
+            raise InputError("point", f"point {k} is not pinned; pin it first")
         self.control.targets[k] = self._target(position)
 
     def unpin(self, point) -> None:
         """Let a pinned point move freely."""
-        k = self.point_index(point)
-        self.control.pinned[k] = False
-        self.control.refresh(self.model)
+        self.control.unpin(self.point_index(point))
 
     def restore_scene_pins(self) -> None:
         """Drop every pin added since the start; keep the scene's own."""
-        self.control.pinned[:] = self.model.pinned
-        self.control.refresh(self.model)
+        self.control.pinned = self.model.pinned
 
     @property
     def pinned_indices(self) -> np.ndarray:
         return self.control.pinned_index
 
+    # -- live edits ------------------------------------------------------------
+
+    def update(self, changes: Mapping[str, Any], *, stability: str | None = None) -> None:
+        """Change the running simulation's scene by dotted keys, the same keys
+        scene files, ``--set`` and sweeps use (:mod:`pvcloth.scene.overrides`).
+
+        The new scene is validated first; then the model's constants, the
+        integrator and the step follow it, and ``sim.scene`` becomes it, so
+        a checkpoint taken afterwards resumes the edited run. Nothing
+        changes if any part is refused.
+
+        Parameters
+        ----------
+        changes : mapping
+            ``{"springs.structural.stiffness": 1200, "wind.velocity": [3, 0, 0],
+            "solver.integrator": "rk4", "solver.dt": None, ...}``. Live keys
+            are under ``springs`` (constants of the families the scene has),
+            ``gravity``, ``air_damping``, ``wind`` and ``solver``.
+        stability : {"refuse", "substep", "ignore"}, optional
+            How the step is checked against the new stable step (default:
+            the new scene's ``solver.stability``).
+
+        Raises
+        ------
+        SceneError
+            A bad key or value, or a step the policy refuses.
+        InputError
+            A key that cannot change during a run (the grid, the pins of the
+            scene, the obstacles): build a new simulation for those.
+
+        Examples
+        --------
+        >>> import pvcloth
+        >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
+        >>> sim.update({"springs.structural.stiffness": 800, "solver.integrator": "verlet"})
+        >>> sim.scene.springs.structural.stiffness, sim.integrator.name
+        (800.0, 'verlet')
+        """
+        self._apply(self.scene.with_overrides(changes), stability)
+
+    def _apply(self, scene: Scene, stability: str | None) -> None:
+        """Run ``scene`` from here on (see :meth:`update`)."""
+        fixed = [
+            f.name
+            for f in dataclasses.fields(Scene)
+            if f.name not in LIVE_KEYS and getattr(scene, f.name) != getattr(self.scene, f.name)
+        ]
+        families = [name for name in ("structural", "shear", "bending")]
+        if [getattr(scene.springs, n) is None for n in families] != [
+            getattr(self.scene.springs, n) is None for n in families
+        ]:
+            fixed.append("springs (a family added or removed)")
+        if fixed:
+            raise InputError(
+                "changes",
+                f"{', '.join(fixed)} cannot change during a run; build a new Simulation for "
+                f"that (live: {', '.join(LIVE_KEYS)})",
+            )
+        policy = scene.solver.stability if stability is None else stability
+        policy = choice("stability", policy, STABILITY_POLICIES, error=InputError)
+        before = (self.scene, self.integrator, self.dt)
+        self.model.apply(scene)
+        if scene.solver.integrator != self.integrator.name:
+            self.integrator = get_integrator(scene.solver.integrator)
+        # The stable step depends on the springs, air damping and the
+        # integrator, not on gravity or wind: only those re-check the step.
+        step_depends = ("springs", "air_damping", "solver")
+        if any(getattr(scene, name) != getattr(self.scene, name) for name in step_depends):
+            try:
+                self.dt = self._checked_step(scene.solver.dt, policy)
+            except BaseException:
+                self.model.apply(before[0])
+                self.integrator = before[1]
+                raise
+        self.scene = scene
+
     def scale_stiffness(self, factor: float) -> None:
         """Multiply every spring's stiffness and damping by ``factor`` (> 0),
         e.g. from a slider; the step is re-checked against the new limit and
-        split into substeps if it became unstable.
+        split into substeps if it became unstable (softer springs give back a
+        step that stiffer ones split).
 
         The springs may end up between :data:`MIN_STIFFNESS_SCALE` and
-        :data:`MAX_STIFFNESS_SCALE` times the scene's (beyond that the
-        stable-step arithmetic under- or overflows); ``stiffness_scale`` says
-        where they are."""
-        factor = real("factor", factor, minimum=0.0, exclusive=True)
+        :data:`MAX_STIFFNESS_SCALE` times the scene's at the start (beyond
+        that the stable-step arithmetic under- or overflows);
+        ``stiffness_scale`` says where they are."""
+        factor = real("factor", factor, minimum=0.0, exclusive=True, error=InputError)
         scale = self.stiffness_scale * factor
         if not MIN_STIFFNESS_SCALE <= scale <= MAX_STIFFNESS_SCALE:
-            raise SceneError(
+            raise InputError(
                 "factor",
                 f"{factor:g} would make the springs {scale:.3g} times the scene's; allowed "
                 f"is {MIN_STIFFNESS_SCALE:g} to {MAX_STIFFNESS_SCALE:g} times",
             )
+        changes = {}
+        for family in ("structural", "shear", "bending"):
+            spec = getattr(self.scene.springs, family)
+            if spec is not None:
+                changes[f"springs.{family}.stiffness"] = spec.stiffness * factor
+                changes[f"springs.{family}.damping"] = spec.damping * factor
+        self.update(changes, stability="substep")
         self.stiffness_scale = scale
-        for springs in self.model.springs:
-            for group in springs.groups:
-                group.stiffness *= factor
-                group.damping *= factor
-        self.model.refresh()
-        # Re-derived from the step asked for, so that softer springs give
-        # back a step that stiffer ones had split.
-        self.dt = self._checked_step(self.requested_dt, "substep")
 
     def set_wind(self, wind) -> None:
         """Replace the scene's wind mid-run (``None`` removes the term).
@@ -397,22 +487,14 @@ class Simulation:
         ----------
         wind : WindSpec or None
         """
-        from pvcloth.physics.forces import Wind
-        from pvcloth.scene.spec import WindSpec
-
         if wind is not None and not isinstance(wind, WindSpec):
-            raise SceneError("wind", f"expected a WindSpec or None, got {type(wind).__name__}")
-        forces = [term for term in self.model.forces if not isinstance(term, Wind)]
-        if wind is not None and (wind.drag > 0 or wind.lift > 0):
-            forces.append(Wind.from_spec(wind, self.model.shape))
-        self.model.forces = forces
-        self.scene = self.scene.replace(wind=wind)
+            raise InputError("wind", f"expected a WindSpec or None, got {type(wind).__name__}")
+        self._apply(self.scene.replace(wind=wind), "substep")
 
     def set_integrator(self, name: str) -> None:
         """Switch integrator mid-run; the step asked for is kept if stable,
         else split into substeps (an automatic step is chosen anew)."""
-        self.integrator = get_integrator(name)
-        self.dt = self._checked_step(self.requested_dt, "substep")
+        self.update({"solver.integrator": name}, stability="substep")
 
     def set_step(self, dt: float | None, stability: str = "refuse") -> None:
         """Ask for a new step mid-run: ``None`` for the automatic one (half
@@ -430,11 +512,38 @@ class Simulation:
         >>> sim.set_step(0.01); sim.dt, sim.dt_source
         (0.01, 'given')
         """
-        if dt is not None:
-            dt = real("dt", dt, minimum=0.0, exclusive=True)
-        stability = choice("stability", stability, STABILITY_POLICIES)
-        self.dt = self._checked_step(dt, stability)
-        self.requested_dt = dt
+        self.update({"solver.dt": dt}, stability=stability)
+
+    @classmethod
+    def resumed(
+        cls,
+        scene: Scene,
+        *,
+        dt: float,
+        stiffness_scale: float,
+        state: State,
+        steps: int,
+        owed: float,
+        pinned: np.ndarray,
+        targets: np.ndarray,
+        integrator_state: dict[str, np.ndarray],
+        backend: str | None = None,
+    ) -> Simulation:
+        """A simulation that continues a saved one exactly (what
+        :func:`pvcloth.load_checkpoint` builds from checked entries): the
+        scene as edited, the step that was being taken (not re-derived), the
+        state, the clock, the pins, the integrator's own state and the
+        backend (the two sum forces in different orders)."""
+        sim = cls(scene, dt=dt, stability="ignore", backend=backend)
+        sim.scene = scene  # the saved solver settings, not the override above
+        sim.stiffness_scale = stiffness_scale
+        sim.state = State(state.x.copy(), state.v.copy(), state.t)
+        sim.steps, sim.owed = steps, owed
+        sim.control.targets[:] = targets
+        sim.control.pinned = pinned
+        sim.integrator.set_state(integrator_state)
+        sim.update_mesh()
+        return sim
 
     # -- time stepping ---------------------------------------------------------
 
@@ -454,11 +563,11 @@ class Simulation:
             If ``seconds`` would take more than :data:`MAX_STEPS` steps (the
             run is refused before it starts).
         """
-        seconds = real("seconds", seconds, minimum=0.0)
-        self.check_run_length(self._owed + seconds)
-        self._owed += seconds
-        n = math.floor(self._owed / self.dt + 1e-9)
-        self._owed = max(self._owed - n * self.dt, 0.0)
+        seconds = real("seconds", seconds, minimum=0.0, error=InputError)
+        self.check_run_length(self.owed + seconds)
+        self.owed += seconds
+        n = math.floor(self.owed / self.dt + 1e-9)
+        self.owed = max(self.owed - n * self.dt, 0.0)
         if n == 0:
             return
         pinned = self.control.pinned_index
@@ -469,6 +578,45 @@ class Simulation:
                 self._substep(pinned, start + (goal - start) * (s / n))
         finally:  # after a divergence too: the mesh shows the last good state
             self.update_mesh()
+
+    def frames(self, count: int, fps: float, before_frame=None) -> Iterator[int]:
+        """The frame loop movies, exports and studies share: yields ``0, 1,
+        ..., count - 1``, frame 0 at the current state and every later one
+        ``1 / fps`` simulated seconds after the one before.
+
+        The whole run's length is checked before the first frame (a run of
+        more than :data:`MAX_STEPS` steps is refused, not found out after
+        hours).
+
+        Parameters
+        ----------
+        count : int
+            Frames, at least 1.
+        fps : float
+            Frames per simulated second, in (0, 1000].
+        before_frame : callable, optional
+            ``before_frame(sim, n)`` runs before frame ``n`` is advanced
+            to (e.g. to move a pin along a scripted path).
+
+        Examples
+        --------
+        >>> import pvcloth
+        >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
+        >>> [round(sim.time, 3) for n in sim.frames(4, fps=10)]
+        [0.0, 0.1, 0.2, 0.3]
+        """
+        count = integer("frames", count, minimum=1, maximum=MAX_STEPS, error=InputError)
+        fps = real("fps", fps, minimum=0.0, exclusive=True, maximum=1000.0, error=InputError)
+        self.check_run_length((count - 1) / fps)
+        return self._frames(count, fps, before_frame)
+
+    def _frames(self, count: int, fps: float, before_frame) -> Iterator[int]:
+        for n in range(count):
+            if before_frame is not None:
+                before_frame(self, n)
+            if n:
+                self.advance(1.0 / fps)
+            yield n
 
     def check_run_length(self, seconds: float) -> int:
         """The number of steps ``seconds`` of simulation take; a
@@ -487,7 +635,7 @@ class Simulation:
 
     def step(self) -> None:
         """One substep of ``dt``."""
-        self._owed = 0.0
+        self.owed = 0.0
         pinned = self.control.pinned_index
         try:
             self._substep(pinned, self.control.targets[pinned])

@@ -11,10 +11,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pvcloth.errors import InputError
+
 
 @dataclass
 class State:
-    """Positions ``x`` and velocities ``v`` (``(N, 3)`` float64) at time ``t``."""
+    """The cloth at one instant.
+
+    Attributes
+    ----------
+    x : ndarray, shape (N, 3)
+        Positions in metres, in VTK point order (index ``i + nx * j``).
+    v : ndarray, shape (N, 3)
+        Velocities in m/s.
+    t : float
+        Time in seconds.
+    """
 
     x: np.ndarray
     v: np.ndarray
@@ -27,7 +39,6 @@ class State:
         return State(self.x.copy(), self.v.copy(), self.t)
 
 
-@dataclass
 class Control:
     """Pinned points and where they should be.
 
@@ -35,36 +46,87 @@ class Control:
     is zero), and the simulation moves it to its target at every step, so a
     target that changes over time drags the cloth.
 
-    Attributes
+    The arrays derived from ``pinned`` cannot go stale: ``pinned`` is
+    read-only and is changed by assigning a whole mask (``control.pinned =
+    mask``) or through :meth:`pin` and :meth:`unpin`, each of which
+    recomputes them and counts a new :attr:`revision` (what integrators
+    with cached factorisations watch).
+
+    Parameters
     ----------
+    mass : ndarray, shape (N,)
+        Point masses in kg (from the model).
     pinned : ndarray of bool, shape (N,)
         Which points are held.
     targets : ndarray, shape (N, 3)
-        Target positions; only rows of pinned points are used.
-    inv_mass : ndarray, shape (N,)
-        Inverse masses with zeros at pinned points: what integrators use.
-    pinned_index, movable_index : ndarray of int
-        Indices of the pinned and of the free points (kept by :meth:`refresh`).
+        Target positions in metres.
+
+    Attributes
+    ----------
+    targets : ndarray, shape (N, 3)
+        Target positions in metres; only rows of pinned points are used.
+        Writable: moving a target changes nothing else.
+    revision : int
+        Counts the changes of the pinned set.
     """
 
-    pinned: np.ndarray
-    targets: np.ndarray
-    inv_mass: np.ndarray
-
-    def __post_init__(self):
-        self.pinned_index = np.flatnonzero(self.pinned)
-        self.movable_index = np.flatnonzero(~self.pinned)
+    def __init__(self, mass: np.ndarray, pinned: np.ndarray, targets: np.ndarray):
+        self._mass = np.asarray(mass, dtype=float)
+        self.targets = np.asarray(targets, dtype=float)
+        self.revision = 0
+        self.pinned = pinned
 
     @classmethod
     def from_model(cls, model) -> Control:
-        pinned = model.pinned.copy()
-        control = cls(pinned, model.rest_positions.copy(), np.zeros(model.n_points))
-        control.refresh(model)
-        return control
+        """The scene's pins, targets at the rest positions."""
+        return cls(model.mass, model.pinned, model.rest_positions.copy())
 
-    def refresh(self, model) -> None:
-        """Recompute ``inv_mass`` after ``pinned`` changed."""
-        np.divide(1.0, model.mass, out=self.inv_mass)
-        self.inv_mass[self.pinned] = 0.0
-        self.pinned_index = np.flatnonzero(self.pinned)
-        self.movable_index = np.flatnonzero(~self.pinned)
+    @property
+    def pinned(self) -> np.ndarray:
+        """Read-only ``(N,)`` bool mask of the held points."""
+        return self._pinned
+
+    @pinned.setter
+    def pinned(self, mask: np.ndarray) -> None:
+        mask = np.array(mask, dtype=bool)  # a copy: the caller's array stays theirs
+        if mask.shape != self._mass.shape:
+            raise InputError("pinned", f"expected shape {self._mass.shape}, got {mask.shape}")
+        inv_mass = 1.0 / self._mass
+        inv_mass[mask] = 0.0
+        for array in (mask, inv_mass):
+            array.flags.writeable = False
+        self._pinned, self._inv_mass = mask, inv_mass
+        self._pinned_index = np.flatnonzero(mask)
+        self._movable_index = np.flatnonzero(~mask)
+        self.revision += 1
+
+    @property
+    def inv_mass(self) -> np.ndarray:
+        """Read-only ``(N,)`` inverse masses in 1/kg, zero at pinned points:
+        what integrators use."""
+        return self._inv_mass
+
+    @property
+    def pinned_index(self) -> np.ndarray:
+        """Indices of the pinned points, ``(P,)``."""
+        return self._pinned_index
+
+    @property
+    def movable_index(self) -> np.ndarray:
+        """Indices of the free points, ``(N - P,)``."""
+        return self._movable_index
+
+    def pin(self, k: int, target: np.ndarray) -> None:
+        """Hold point ``k`` at ``target`` (metres)."""
+        self.targets[k] = target
+        if not self._pinned[k]:
+            mask = self._pinned.copy()
+            mask[k] = True
+            self.pinned = mask
+
+    def unpin(self, k: int) -> None:
+        """Let point ``k`` move freely."""
+        if self._pinned[k]:
+            mask = self._pinned.copy()
+            mask[k] = False
+            self.pinned = mask

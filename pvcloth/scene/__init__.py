@@ -1,43 +1,7 @@
-"""What to simulate: validated, frozen scene descriptions (``spec``), the
-value checks they use (``validation``) and TOML loading.
+"""What to simulate: validated, frozen scene descriptions and TOML loading
+(``spec``), the value checks they use (``validation``) and the dotted-key
+dialect every scene change is written in (``overrides``).
 
 The scene layer depends on nothing else in pvcloth but :mod:`pvcloth.errors`.
+The scene types are exported from ``pvcloth`` itself (``pvcloth.Scene``).
 """
-
-from pvcloth.scene.spec import (
-    CORNERS,
-    EDGES,
-    INTEGRATOR_NAMES,
-    MAX_LENGTH,
-    OBSTACLE_TYPES,
-    ORIENTATIONS,
-    STABILITY_POLICIES,
-    ClothSpec,
-    ObstacleSpec,
-    PinSpec,
-    Scene,
-    SolverSpec,
-    SpringSpec,
-    SpringsSpec,
-    WindSpec,
-    load_scene,
-)
-
-__all__ = [
-    "CORNERS",
-    "EDGES",
-    "INTEGRATOR_NAMES",
-    "MAX_LENGTH",
-    "OBSTACLE_TYPES",
-    "ORIENTATIONS",
-    "STABILITY_POLICIES",
-    "ClothSpec",
-    "ObstacleSpec",
-    "PinSpec",
-    "Scene",
-    "SolverSpec",
-    "SpringSpec",
-    "SpringsSpec",
-    "WindSpec",
-    "load_scene",
-]

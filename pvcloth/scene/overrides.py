@@ -15,7 +15,7 @@ Two shorthands, for the settings changed most often:
 
 Values given as text (from a command line) are read as TOML values:
 ``1e-3``, ``true``, ``[0.0, 0.0, -9.81]``, ``"rk4"``; a bare word such as
-``rk4`` is text.
+``rk4`` is text, and ``.5`` a number.
 """
 
 from __future__ import annotations
@@ -40,6 +40,10 @@ def parse_value(text: str) -> Any:
     try:
         return tomllib.loads(f"value = {text}")["value"]
     except tomllib.TOMLDecodeError:
+        pass
+    try:
+        return float(text)  # what TOML does not take but Python does: .5, 1.
+    except ValueError:
         return text  # a bare word: text
 
 

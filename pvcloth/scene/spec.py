@@ -26,13 +26,16 @@ not per spring, so refining the grid approximates the same cloth.
 from __future__ import annotations
 
 import dataclasses
+import html
 import math
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 from pvcloth.errors import SceneError
+from pvcloth.scene.overrides import assign, expand
 from pvcloth.scene.validation import check_keys, choice, integer, real, sequence, vector
 
 #: Largest number of points along one side of the cloth.
@@ -519,7 +522,9 @@ class Scene:
         Parameters
         ----------
         data : dict
-            Keys as in the scene files; missing keys take their defaults.
+            Keys as in the scene files, nested tables or dotted keys
+            (``{"solver.dt": 1e-3}``, see :mod:`pvcloth.scene.overrides`);
+            missing keys take their defaults.
         name : str, optional
             Overrides ``data["name"]``.
 
@@ -533,6 +538,8 @@ class Scene:
         SceneError
             For any unknown key or bad value.
         """
+        if isinstance(data, Mapping) and any(isinstance(k, str) and "." in k for k in data):
+            data = expand(data)  # dotted keys, as --set and sweeps write them
         data = dict(check_keys("", data, [f.name for f in fields(cls)]))
         if name is not None:
             data["name"] = name
@@ -566,6 +573,24 @@ class Scene:
     def replace(self, **changes) -> Scene:
         """A copy with top-level fields replaced (validated again)."""
         return dataclasses.replace(self, **changes)
+
+    def with_overrides(self, changes: Mapping[str, Any]) -> Scene:
+        """A copy with dotted keys set, validated like a scene file
+        (the dialect of :mod:`pvcloth.scene.overrides`).
+
+        Examples
+        --------
+        >>> from pvcloth import Scene
+        >>> scene = Scene().with_overrides({"solver.dt": 1e-3, "springs.shear": 50.0})
+        >>> scene.solver.dt, scene.springs.shear.stiffness
+        (0.001, 50.0)
+        """
+        if not changes:
+            return self
+        data = self.to_dict()
+        for key, value in changes.items():
+            assign(data, key, value)
+        return Scene.from_dict(data)
 
     # -- how it reads in a terminal and a notebook ---------------------------
 
@@ -622,7 +647,7 @@ class Scene:
         return f"Scene({self.name!r}){rows}"
 
     def _repr_html_(self) -> str:
-        return _html_table(f"Scene {self.name!r}", self.summary())
+        return html_table(f"Scene {self.name!r}", self.summary())
 
 
 def _obstacle_text(obstacle: ObstacleSpec) -> str:
@@ -638,10 +663,8 @@ def _vec(values) -> str:
     return "(" + ", ".join(f"{v:g}" for v in values) + ")"
 
 
-def _html_table(title: str, rows) -> str:
+def html_table(title: str, rows) -> str:
     """A small HTML table for notebooks (the escaping is html.escape's)."""
-    import html
-
     body = "".join(
         f"<tr><th style='text-align:left'>{html.escape(k)}</th>"
         f"<td style='text-align:left'>{html.escape(v)}</td></tr>"

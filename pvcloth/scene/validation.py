@@ -1,7 +1,9 @@
 """Small checkers that turn user values into validated Python values.
 
 Each checker names the key it was given, the bad value and what is allowed,
-and raises :class:`~pvcloth.errors.SceneError`. They never let a NumPy or
+and raises :class:`~pvcloth.errors.SceneError` (or, for arguments that are
+not scene keys, the error class given as ``error``, e.g.
+:class:`~pvcloth.errors.InputError`). They never let a NumPy or
 ``TypeError`` traceback through.
 """
 
@@ -12,7 +14,7 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from numbers import Integral, Real
 
-from pvcloth.errors import SceneError
+from pvcloth.errors import InputError, SceneError
 
 
 def describe(value: object) -> str:
@@ -47,33 +49,36 @@ def real(
     minimum: float | None = None,
     exclusive: bool = False,
     maximum: float | None = None,
+    error: type[InputError] = SceneError,
 ) -> float:
     """A finite real number, optionally bounded below (and above)."""
     if isinstance(value, bool) or not isinstance(value, Real):
-        raise SceneError(key, f"expected a number, got {describe(value)}")
+        raise error(key, f"expected a number, got {describe(value)}")
     try:
         number = float(value)
     except OverflowError:  # an integer beyond any float, e.g. 10**400
-        raise SceneError(key, f"expected a finite number, got {describe(value)}") from None
+        raise error(key, f"expected a finite number, got {describe(value)}") from None
     if not math.isfinite(number):
-        raise SceneError(key, f"expected a finite number, got {value!r}")
+        raise error(key, f"expected a finite number, got {value!r}")
     if minimum is not None:
         if exclusive and not number > minimum:
-            raise SceneError(key, f"must be greater than {minimum:g}, got {value!r}")
+            raise error(key, f"must be greater than {minimum:g}, got {value!r}")
         if not exclusive and not number >= minimum:
-            raise SceneError(key, f"must be at least {minimum:g}, got {value!r}")
+            raise error(key, f"must be at least {minimum:g}, got {value!r}")
     if maximum is not None and number > maximum:
-        raise SceneError(key, f"must be at most {maximum:g}, got {value!r}")
+        raise error(key, f"must be at most {maximum:g}, got {value!r}")
     return number
 
 
-def integer(key: str, value: object, *, minimum: int, maximum: int) -> int:
+def integer(
+    key: str, value: object, *, minimum: int, maximum: int, error: type[InputError] = SceneError
+) -> int:
     """An integer within ``[minimum, maximum]``."""
     if isinstance(value, bool) or not isinstance(value, Integral):
-        raise SceneError(key, f"expected a whole number, got {describe(value)}")
+        raise error(key, f"expected a whole number, got {describe(value)}")
     number = int(value)
     if not minimum <= number <= maximum:
-        raise SceneError(key, f"must be between {minimum} and {maximum}, got {number}")
+        raise error(key, f"must be between {minimum} and {maximum}, got {number}")
     return number
 
 
@@ -92,12 +97,14 @@ def vector(key: str, value: object, length: int, **bounds) -> tuple[float, ...]:
     return tuple(real(f"{key}[{n}]", item, **bounds) for n, item in enumerate(items))
 
 
-def choice(key: str, value: object, allowed: Sequence[str]) -> str:
+def choice(
+    key: str, value: object, allowed: Sequence[str], *, error: type[InputError] = SceneError
+) -> str:
     """One of the strings in ``allowed``, with a did-you-mean hint."""
     if not isinstance(value, str):
-        raise SceneError(key, f"expected one of {', '.join(allowed)}; got {describe(value)}")
+        raise error(key, f"expected one of {', '.join(allowed)}; got {describe(value)}")
     if value not in allowed:
         close = difflib.get_close_matches(value, allowed, n=1)
         hint = f"; did you mean {close[0]!r}?" if close else ""
-        raise SceneError(key, f"{value!r} is not allowed{hint} Choose one of: {', '.join(allowed)}")
+        raise error(key, f"{value!r} is not allowed{hint} Choose one of: {', '.join(allowed)}")
     return value

@@ -15,15 +15,16 @@ work it had in hand. Rows are appended to ``sweep.csv`` as units finish (one
 ``write`` and ``flush`` per row), so an interrupted sweep keeps every finished
 row, and running the same command again skips the rows already there.
 
-Value syntax (validated like scene files, through :class:`~pvcloth.scene.Scene`):
+Value syntax (validated like scene files, through :class:`~pvcloth.Scene`):
 
 - a list: ``springs.structural=1e2,1e3,1e4`` or ``solver.integrator=rk4,verlet``
 - a linear range: ``cloth.mass=0.1:0.5:5lin`` (5 values from 0.1 to 0.5)
 - a logarithmic range: ``solver.dt=1e-4:1e-2:8log``
 
-Keys are dotted scene keys. Two shorthands: a spring family
-(``springs.structural``) sets its stiffness, and ``cloth.resolution=N`` means
-N x N points.
+Keys are dotted scene keys, in the dialect every scene change uses
+(:mod:`pvcloth.scene.overrides`, with its two shorthands: a spring family
+``springs.structural`` sets its stiffness, and ``cloth.resolution=N`` means
+N x N points); each value is read as there.
 """
 
 from __future__ import annotations
@@ -36,15 +37,17 @@ import logging
 import math
 import re
 import signal
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from tqdm.auto import tqdm
 
-from pvcloth.errors import DivergenceError, SceneError, SweepError
+from pvcloth.errors import SceneError, SweepError
+from pvcloth.scene.overrides import parse_value
 from pvcloth.scene.spec import Scene
 from pvcloth.signals import deferred
+from pvcloth.studies import runs
 
 FIELDS = [
     "id",
@@ -62,19 +65,6 @@ _RANGE = re.compile(r"^([^:]+):([^:]+):(\d+)(lin|log)$")
 
 
 # -- settings -------------------------------------------------------------------
-
-
-def _scalar(text: str):
-    """A value as TOML would read it: integer, float, true/false, else text."""
-    text = text.strip()
-    if text in ("true", "false"):
-        return text == "true"
-    for kind in (int, float):
-        try:
-            return kind(text)
-        except ValueError:
-            pass
-    return text
 
 
 def parse_values(key: str, spec: str) -> list:
@@ -105,7 +95,7 @@ def parse_values(key: str, spec: str) -> list:
         else:
             values = np.linspace(low, high, count)
         return [float(f"{v:.12g}") for v in values]
-    values = [_scalar(item) for item in spec.split(",") if item.strip()]
+    values = [parse_value(item) for item in spec.split(",") if item.strip()]
     if not values:
         raise SweepError(f"--set {key}: no values given")
     return values
@@ -123,25 +113,6 @@ def parse_sets(items: list[str]) -> dict[str, list]:
             raise SweepError(f"--set {key} is given twice")
         sets[key] = parse_values(key, spec)
     return sets
-
-
-def _assign(data: dict, key: str, value) -> None:
-    """Set a dotted key in nested scene data, with the two shorthands."""
-    parts = key.split(".")
-    node = data
-    for part in parts[:-1]:
-        child = node.setdefault(part, {})
-        if not isinstance(child, dict):
-            raise SceneError(key, f"{part!r} is a value, not a table")
-        node = child
-    last = parts[-1]
-    if parts[0] == "springs" and len(parts) == 2:
-        family = node.get(last)
-        node[last] = {**(family if isinstance(family, dict) else {}), "stiffness": value}
-    elif key == "cloth.resolution" and not isinstance(value, (list, tuple)):
-        node[last] = [value, value]
-    else:
-        node[last] = value
 
 
 @dataclass(frozen=True)
@@ -177,15 +148,11 @@ def expand(scene: Scene, sets: dict[str, list]) -> list[Unit]:
         Naming the ``--set`` key and value that make a bad scene.
     """
     units = []
-    base = scene.to_dict()
     keys = list(sets)
     for values in itertools.product(*(sets[k] for k in keys)):
-        data = json.loads(json.dumps(base))
-        for key, value in zip(keys, values, strict=True):
-            _assign(data, key, value)
         settings = dict(zip(keys, values, strict=True))
         try:
-            units.append(Unit(settings, Scene.from_dict(data)))
+            units.append(Unit(settings, scene.with_overrides(settings)))
         except SceneError as error:
             raise SceneError(
                 error.key, f"{error.message} (from --set {', '.join(keys)} = {values})"
@@ -197,63 +164,35 @@ def expand(scene: Scene, sets: dict[str, list]) -> list[Unit]:
 
 
 def reference_step(scenes: list[Scene], duration: float) -> float:
-    """RK4 at a quarter of the smallest step swept, kept below half its stable
-    step, and dividing ``duration`` exactly."""
-    from pvcloth.physics.simulation import Simulation
-
-    smallest = min(_step(s) for s in scenes)
-    limit = Simulation(scenes[0], integrator="rk4", stability="ignore").stable_dt()
-    dt = min(smallest / 4, 0.5 * limit)
-    return duration / math.ceil(duration / dt)
-
-
-def _step(scene: Scene) -> float:
-    """The scene's step, or the automatic one it gets when it gives none."""
-    from pvcloth.physics.simulation import Simulation
-
-    if scene.solver.dt is not None:
-        return scene.solver.dt
-    return Simulation(scene, stability="ignore").dt
+    """The step of the reference shared by ``scenes`` (one physics, several
+    solver settings): see :func:`pvcloth.studies.runs.reference_step`."""
+    return runs.reference_step(scenes[0], min(runs.scene_step(s) for s in scenes), duration)
 
 
 def run_reference(scene: Scene, dt: float, duration: float) -> dict:
     """Positions and energy of the fine solution (a Dask task)."""
-    from pvcloth.physics.simulation import Simulation
-
-    sim = Simulation(scene, integrator="rk4", dt=dt, stability="ignore")
-    sim.advance(duration)
+    sim = runs.reference_run(scene, duration, dt)
     return {"x": np.array(sim.positions), "energy": sim.energy()["total"], "dt": dt}
 
 
 def run_unit(unit: Unit, reference: dict, duration: float) -> dict:
     """One short simulation, compared with its reference (a Dask task)."""
-    from pvcloth.physics.simulation import Simulation
-
     scene = unit.scene
-    # Whole steps that end exactly at `duration`, as in the trade-off command.
-    dt = duration / max(1, round(duration / _step(scene)))
-    sim = Simulation(scene, dt=dt, stability="ignore")
-    start = time.perf_counter()
-    error_text = ""
-    try:
-        sim.advance(duration)
-        stable = True
-    except DivergenceError as error:
-        stable, error_text = False, str(error)
-    wall = time.perf_counter() - start
+    dt = runs.dividing_step(duration, runs.scene_step(scene))
+    run = runs.timed_run(scene, duration, dt=dt)
     rms = energy = math.nan
-    if stable:
-        rms = float(np.sqrt(np.mean(np.sum((sim.positions - reference["x"]) ** 2, axis=1))))
-        energy = float(sim.energy()["total"])
+    if run.stable:
+        rms = runs.rms_distance(run.sim.positions, reference["x"])
+        energy = float(run.sim.energy()["total"])
     return {
         "id": unit.id,
         "settings": unit.label,
         "integrator": scene.solver.integrator,
         "dt": dt,
-        "stable": stable,
-        "error": error_text,
+        "stable": run.stable,
+        "error": run.message,
         "rms_error": rms,
-        "wall_per_sim_second": wall / max(sim.time, dt),
+        "wall_per_sim_second": run.wall_per_sim_second,
         "final_energy": energy,
     }
 
@@ -374,8 +313,6 @@ def run_sweep(
     list of dict
         All rows of the sweep, old and new, in unit order.
     """
-    from tqdm.auto import tqdm
-
     units = expand(scene, sets)
     out.mkdir(parents=True, exist_ok=True)
     path = out / "sweep.csv"
@@ -459,10 +396,9 @@ def plot(rows: list[dict], sets: dict[str, list], path: Path, axes: list[str] | 
     """Stability maps over two swept keys (one panel per integrator; a cell's
     colour is the share of its runs that stayed stable) and the accuracy-cost
     points of every stable run."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    # A Figure of its own, drawn by Agg when saved: no pyplot, so the
+    # caller's matplotlib backend (a notebook's) is left as it was.
+    from matplotlib.figure import Figure
 
     if not axes:  # the swept keys with several values; the step across if swept
         keys = [k for k in sets if k != "solver.integrator" and len(sets[k]) > 1]
@@ -472,13 +408,8 @@ def plot(rows: list[dict], sets: dict[str, list], path: Path, axes: list[str] | 
         if key not in sets:
             raise SweepError(f"--axes {key}: not a swept key (swept: {', '.join(sets)})")
     integrators = sorted({r["integrator"] for r in rows})
-    fig, panels = plt.subplots(
-        1,
-        len(integrators) + 1,
-        figsize=(3.6 * (len(integrators) + 1), 3.6),
-        dpi=100,
-        squeeze=False,
-    )
+    fig = Figure(figsize=(3.6 * (len(integrators) + 1), 3.6), dpi=100)
+    panels = fig.subplots(1, len(integrators) + 1, squeeze=False)
     panels = panels[0]
     for panel, name in zip(panels, integrators, strict=False):
         mine = [r for r in rows if r["integrator"] == name]
@@ -502,7 +433,6 @@ def plot(rows: list[dict], sets: dict[str, list], path: Path, axes: list[str] | 
     cost.grid(True, which="both", alpha=0.2)
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
 
 
 def _stability_panel(panel, rows, sets, axes) -> None:

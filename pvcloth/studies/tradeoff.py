@@ -1,7 +1,8 @@
 """Speed against accuracy: every integrator over a range of time steps.
 
 Each run simulates the same scene for the same time and is compared with a
-reference run (RK4 at a quarter of the smallest step asked for): the RMS
+reference run (RK4 at a quarter of the smallest step asked for, see
+:mod:`pvcloth.studies.runs`): the RMS
 distance of the points at the end, the relative difference of total energy
 at the end (the numerical energy drift, since the reference loses only what
 damping takes), the wall time per simulated second, and whether it stayed
@@ -14,15 +15,21 @@ from __future__ import annotations
 
 import csv
 import math
-import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
+from tqdm.auto import tqdm
 
-from pvcloth.errors import DivergenceError
 from pvcloth.physics.integrators import INTEGRATORS
 from pvcloth.physics.simulation import Simulation
+from pvcloth.studies.runs import (
+    dividing_step,
+    reference_run,
+    reference_step,
+    rms_distance,
+    timed_run,
+)
 
 
 @dataclass
@@ -36,13 +43,6 @@ class Run:
     energy_drift: float  # relative; nan if unstable
     wall_per_sim_second: float  # s of wall time per s of simulated time
     steps: int
-
-
-def reference(scene, duration: float, dt: float) -> Simulation:
-    """The fine solution every run is compared with."""
-    sim = Simulation(scene, integrator="rk4", dt=dt, stability="ignore")
-    sim.advance(duration)
-    return sim
 
 
 def default_steps(scene, count: int = 8) -> list[float]:
@@ -70,33 +70,23 @@ def measure(scene, *, integrators=None, steps=None, duration=0.25, progress=True
     -------
     list of Run
     """
-    from tqdm.auto import tqdm
-
     integrators = sorted(INTEGRATORS) if integrators is None else list(integrators)
     steps = default_steps(scene) if steps is None else sorted(steps)
-    # Every run must end exactly at `duration`, or the time mismatch (first
-    # order in dt) would hide every method's true order.
-    steps = sorted({duration / max(1, round(duration / dt)) for dt in steps})
-    truth = reference(scene, duration, duration / (4 * round(duration / min(steps))))
+    # Every run ends exactly at `duration` (see dividing_step).
+    steps = sorted({dividing_step(duration, dt) for dt in steps})
+    truth = reference_run(scene, duration, reference_step(scene, min(steps), duration))
     x_ref, e_ref = truth.positions, truth.energy()["total"]
     scale = max(abs(e_ref), truth.model.kinetic_energy(truth.velocities), 1e-12)
     runs = []
     jobs = [(name, dt) for name in integrators for dt in steps]
     for name, dt in tqdm(jobs, desc="trade-off runs", unit="run", disable=not progress):
-        sim = Simulation(scene, integrator=name, dt=dt, stability="ignore")
-        start = time.perf_counter()
-        try:
-            sim.advance(duration)
-            stable = True
-        except DivergenceError:
-            stable = False
-        wall = time.perf_counter() - start
-        if stable:
-            error = float(np.sqrt(np.mean(np.sum((sim.positions - x_ref) ** 2, axis=1))))
-            drift = (sim.energy()["total"] - e_ref) / scale
+        run = timed_run(scene, duration, integrator=name, dt=dt)
+        if run.stable:
+            error = rms_distance(run.sim.positions, x_ref)
+            drift = (run.sim.energy()["total"] - e_ref) / scale
         else:
             error = drift = math.nan
-        runs.append(Run(name, dt, stable, error, drift, wall / max(sim.time, dt), sim.steps))
+        runs.append(Run(name, dt, run.stable, error, drift, run.wall_per_sim_second, run.sim.steps))
     return runs
 
 
@@ -124,12 +114,12 @@ def write_csv(runs: list[Run], path: Path) -> None:
 def plot(runs: list[Run], path: Path, title: str) -> None:
     """Error against cost, one marker per integrator, the Pareto front as a
     line, unstable runs as crosses along the top."""
-    import matplotlib
+    # A Figure of its own, drawn by Agg when saved: no pyplot, so the
+    # caller's matplotlib backend (a notebook's) is left as it was.
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=110)
+    fig = Figure(figsize=(7, 4.5), dpi=110)
+    ax = fig.subplots()
     stable = [r for r in runs if r.stable]
     ceiling = 3 * max((r.rms_error for r in stable), default=1.0)
     for n, name in enumerate(sorted({r.integrator for r in runs})):
@@ -180,7 +170,6 @@ def plot(runs: list[Run], path: Path, title: str) -> None:
     ax.grid(True, which="both", alpha=0.2)
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)
 
 
 def table(runs: list[Run]) -> str:

@@ -13,12 +13,17 @@ import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pvcloth.errors import MovieInterrupted, SceneError
-from pvcloth.io.timeseries import remove_orphaned_temporaries
+from pvcloth.errors import InputError, MovieInterrupted
+from pvcloth.io.files import remove_orphaned_temporaries
+from pvcloth.progress import frame_bar
 from pvcloth.signals import deferred
+
+if TYPE_CHECKING:  # for annotations only
+    from pvcloth.physics.simulation import Simulation
 
 FORMATS = (".gif", ".mp4", ".png")
 
@@ -56,9 +61,9 @@ def parse_size(text: str) -> tuple[int, int]:
     try:
         width, height = (int(part) for part in text.lower().split("x"))
     except ValueError:
-        raise SceneError("size", f"expected WIDTHxHEIGHT like 640x480, got {text!r}") from None
+        raise InputError("size", f"expected WIDTHxHEIGHT like 640x480, got {text!r}") from None
     if not (16 <= width <= 8192 and 16 <= height <= 8192):
-        raise SceneError("size", f"each side must be 16 to 8192 pixels, got {text!r}")
+        raise InputError("size", f"each side must be 16 to 8192 pixels, got {text!r}")
     return width, height
 
 
@@ -100,7 +105,7 @@ class _FrameWriter:
 
 
 def render(
-    sim,
+    sim: Simulation,
     output: str | os.PathLike,
     *,
     frames: int = 90,
@@ -149,16 +154,10 @@ def render(
     >>> stats.path.name, stats.frames, round(sim.time, 3)
     ('hanging.gif', 6, 0.167)
     """
-    from tqdm.auto import tqdm
-
     path = Path(output)
     if path.suffix.lower() not in FORMATS:
-        raise SceneError("output", f"unknown extension {path.suffix!r}; use one of {FORMATS}")
-    if not isinstance(frames, int) or isinstance(frames, bool) or frames < 1:
-        raise SceneError("frames", f"must be a whole number of at least 1, got {frames!r}")
-    if not (isinstance(fps, (int, float)) and 0 < fps <= 1000):
-        raise SceneError("fps", f"must be a number in (0, 1000], got {fps!r}")
-    sim.check_run_length((frames - 1) / fps)  # refused before any work, not after hours
+        raise InputError("output", f"unknown extension {path.suffix!r}; use one of {FORMATS}")
+    frame_numbers = sim.frames(frames, fps, before_frame)  # checked before any work
     path.parent.mkdir(parents=True, exist_ok=True)
     # Hidden, named with this process's id: one left by a killed run is
     # removed by the next run's atomic_write clean-up.
@@ -171,8 +170,9 @@ def render(
     with deferred():  # a signal inside VTK's module set-up crashed the process
         import pyvista as pv
 
-        from pvcloth.visual.view import ClothView
+        from pvcloth.visual.view import ClothView, use_offscreen_gl_if_headless
 
+        use_offscreen_gl_if_headless()
         plotter = pv.Plotter(off_screen=True, notebook=False, window_size=list(size))
     writer = None
     # Only the physics is interrupted at once: a Ctrl-C or SIGTERM that comes
@@ -183,13 +183,9 @@ def render(
             view = ClothView(sim, plotter)
             plotter.show(auto_close=False)
             writer = _FrameWriter(partial, fps)
-        bar = tqdm(range(frames), desc=f"rendering {path.name}", unit="frame", disable=not progress)
-        for n in bar:
-            if before_frame is not None:
-                before_frame(sim, n)
-            t0 = time.perf_counter()
-            if n:
-                sim.advance(1.0 / fps)
+        bar = frame_bar(frame_numbers, frames, f"rendering {path.name}", enabled=progress)
+        t0 = time.perf_counter()
+        for _ in bar:  # each frame's physics runs inside the loop's next()
             t1 = time.perf_counter()
             with deferred():
                 view.update()
@@ -203,6 +199,7 @@ def render(
             stats.drawing.append(t2 - t1)
             stats.encoding.append(t3 - t2)
             bar.set_postfix_str(f"t={sim.time:.2f}s")
+            t0 = time.perf_counter()
         with deferred():
             t0 = time.perf_counter()
             writer.close()

@@ -8,23 +8,28 @@ added once and smooth shading follows it.
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
 
 import numpy as np
+import pyvista as pv
+
+from pvcloth.physics.grid import point_stretch
+
+if TYPE_CHECKING:  # for annotations only
+    from pvcloth.physics.simulation import Simulation
 
 
 def use_offscreen_gl_if_headless() -> None:
     """With no X display, ask VTK for an EGL window (software GL via Mesa).
 
-    Without a display VTK would try X and crash; the variable only selects
-    which render window class VTK builds and can still be overridden.
+    VTK reads the variable when it builds a render window, so this is
+    called just before pvcloth makes a plotter (a movie, ``sim.plot``), not
+    at import. Without it VTK first tries X and prints a "bad X server
+    connection" warning before falling back; a value already set wins.
     """
     if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
-
-use_offscreen_gl_if_headless()
-
-import pyvista as pv  # noqa: E402  (after the GL choice above)
 
 CLOTH_COLOR = "#c8553d"
 BACK_COLOR = "#b7bfc9"
@@ -52,14 +57,14 @@ def obstacle_matrix(obstacle, t: float) -> np.ndarray:
     return matrix
 
 
-def cloth_grid(positions: np.ndarray, shape: tuple[int, int]) -> pv.StructuredGrid:
+def cloth_grid(positions: np.ndarray, resolution: tuple[int, int]) -> pv.StructuredGrid:
     """A StructuredGrid of dimensions ``(nx, ny, 1)`` whose point ``k`` is
     ``positions[k]``: the solver's order is VTK's order, no reordering.
 
     Parameters
     ----------
     positions : ndarray, shape (nx * ny, 3)
-    shape : (int, int)
+    resolution : (int, int)
         ``(nx, ny)``.
 
     Examples
@@ -70,30 +75,28 @@ def cloth_grid(positions: np.ndarray, shape: tuple[int, int]) -> pv.StructuredGr
     >>> grid.dimensions
     (4, 3, 1)
     """
-    nx, ny = shape
+    nx, ny = resolution
     grid = pv.StructuredGrid()
     grid.points = np.array(positions, dtype=float)
     grid.dimensions = (nx, ny, 1)
     return grid
 
 
-def cloth_mesh(sim) -> pv.StructuredGrid:
+def cloth_mesh(sim: Simulation) -> pv.StructuredGrid:
     """A new grid of the simulation's cloth with its point data (what
     ``Simulation.mesh`` holds; see there for the fields)."""
-    grid = cloth_grid(sim.positions, sim.shape)
+    grid = cloth_grid(sim.positions, sim.resolution)
     update_cloth_mesh(grid, sim)
     return grid
 
 
-def update_cloth_mesh(grid: pv.StructuredGrid, sim) -> None:
+def update_cloth_mesh(grid: pv.StructuredGrid, sim: Simulation) -> None:
     """Refresh ``grid``'s points and point data from ``sim`` in place.
 
     Point arrays are assigned, not copied into, so VTK sees the change. No
     array is made the active scalars: a plotter that draws the grid in one
     colour keeps doing so.
     """
-    from pvcloth.physics.grid import point_stretch
-
     state = sim.state  # one state throughout, should a physics thread replace it
     positions = state.x.copy()
     grid.points = positions
@@ -117,7 +120,7 @@ FIELD_TITLES = {
 }
 
 
-def plot_cloth(sim, **kwargs):
+def plot_cloth(sim: Simulation, **kwargs):
     """``sim.mesh.plot(**kwargs)`` in the cloth's colour and smooth shading,
     unless ``scalars`` or ``color`` say otherwise; a field of the mesh gets a
     scalar bar titled with its unit."""
@@ -130,10 +133,11 @@ def plot_cloth(sim, **kwargs):
         bar.setdefault("fmt", "%.4g")  # stretch varies in the third decimal
         kwargs["scalar_bar_args"] = bar
     kwargs.setdefault("smooth_shading", True)
+    use_offscreen_gl_if_headless()
     return sim.mesh.plot(**kwargs)
 
 
-def motion_bounds(sim) -> tuple[float, ...]:
+def motion_bounds(sim: Simulation) -> tuple[float, ...]:
     """Box the cloth can reach while it swings from its pins: where it starts,
     that box mirrored through the pins (the far side of the swing), and both
     moved down the gravity direction by the cloth's size."""
@@ -188,7 +192,14 @@ class ClothView:
     >>> sim.advance(1 / 30); view.update()
     """
 
-    def __init__(self, sim, plotter: pv.Plotter, *, show_pins: bool = True, own_grid: bool = False):
+    def __init__(
+        self,
+        sim: Simulation,
+        plotter: pv.Plotter,
+        *,
+        show_pins: bool = True,
+        own_grid: bool = False,
+    ):
         self.sim = sim
         self.plotter = plotter
         self.own_grid = own_grid

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from pvcloth.errors import DisplayError, DivergenceError, SceneError
+from pvcloth.io.files import atomic_write
 from pvcloth.physics.integrators import INTEGRATORS
 from pvcloth.scene.spec import WindSpec
 from pvcloth.visual.interaction import ClothDragStyle, DragPath
@@ -223,38 +224,35 @@ class ClothApp:
     def _add_sliders(self):
         # Right-hand column in normalized display coordinates.
         self._stiffness = 1.0
-        self.stiffness_slider = self.plotter.add_slider_widget(
-            self._set_stiffness,
-            rng=[0.1, 10.0],
-            value=1.0,
-            title="stiffness x",
-            pointa=(0.76, 0.74),
-            pointb=(0.98, 0.74),
-            style="modern",
-            fmt="%.2f",
-            title_height=0.025,
-            slider_width=0.02,
-            tube_width=0.005,
+        self.stiffness_slider = self._slider(
+            self._set_stiffness, (0.1, 10.0), 1.0, "stiffness x", 0.74, "%.2f"
         )
         self._wind = self.sim.scene.wind or DEFAULT_WIND  # what "w" turns on
         speed = math.hypot(*self._wind.velocity)
         self._wind_direction = (
             tuple(c / speed for c in self._wind.velocity) if speed else (0.0, 1.0, 0.0)
         )
-        self.wind_slider = self.plotter.add_slider_widget(
-            self._set_wind_speed,
-            rng=[0.0, 20.0],
-            value=speed,
-            title="wind m/s",
-            pointa=(0.76, 0.62),
-            pointb=(0.98, 0.62),
+        self.wind_slider = self._slider(
+            self._set_wind_speed, (0.0, 20.0), speed, "wind m/s", 0.62, "%.1f"
+        )
+        self._show_wind_slider(self.sim.scene.wind is not None)
+
+    def _slider(self, callback, limits, value: float, title: str, height: float, fmt: str):
+        """A slider in the right-hand column at ``height`` (normalized display
+        coordinates, so it keeps its place and size whatever the window's)."""
+        return self.plotter.add_slider_widget(
+            callback,
+            rng=list(limits),
+            value=value,
+            title=title,
+            pointa=(0.76, height),
+            pointb=(0.98, height),
             style="modern",
-            fmt="%.1f",
+            fmt=fmt,
             title_height=0.025,
             slider_width=0.02,
             tube_width=0.005,
         )
-        self._show_wind_slider(self.sim.scene.wind is not None)
 
     def _show_wind_slider(self, on: bool) -> None:
         (self.wind_slider.On if on else self.wind_slider.Off)()
@@ -456,8 +454,7 @@ class ClothApp:
         following = names[(names.index(self.sim.integrator.name) + 1) % len(names)]
 
         def switch():
-            self.sim.set_integrator(following)
-            self.sim.set_step(None)
+            self.sim.update({"solver.integrator": following, "solver.dt": None})
             self.physics.forget_pace()
 
         self.request(switch)
@@ -484,7 +481,9 @@ class ClothApp:
 
     def screenshot(self) -> Path:
         path = next_screenshot_path(self.shot_folder, f"pvcloth_{self.sim.scene.name}")
-        self.plotter.screenshot(str(path))
+        # Written whole under a temporary name: whoever watches the folder
+        # (a file manager, a test) never reads half a picture.
+        atomic_write(path, lambda temporary: self.plotter.screenshot(temporary))
         self.message = f"screenshot: {path}"
         print(f"pvcloth: screenshot written to {path}", flush=True)
         return path

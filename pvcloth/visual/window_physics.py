@@ -26,6 +26,7 @@ from concurrent.futures import Future
 import numpy as np
 
 from pvcloth.errors import DivergenceError
+from pvcloth.physics.kernels import use_threads
 
 #: The state kept from before each of the last this many chunks: a
 #: divergence goes back to the newest calm one.
@@ -150,8 +151,6 @@ class PhysicsThread:
         self._requests.put(None)
 
     def _loop(self):
-        from pvcloth.physics.kernels import use_threads
-
         # The drawing needs a core: leave it one (see use_threads).
         use_threads((os.cpu_count() or 1) - 1)
         while not self._stop:

@@ -13,12 +13,11 @@ from pvcloth.physics.integrators import (  # noqa: F401  (importing registers th
     verlet,
 )
 from pvcloth.physics.integrators.base import INTEGRATORS, Integrator, register
+from pvcloth.scene.validation import choice
 
 __all__ = ["INTEGRATORS", "Integrator", "get_integrator", "register"]
 
 
 def get_integrator(name: str) -> Integrator:
     """A new integrator instance by registry name, e.g. ``"symplectic_euler"``."""
-    from pvcloth.scene.validation import choice
-
     return INTEGRATORS[choice("integrator", name, sorted(INTEGRATORS))]()

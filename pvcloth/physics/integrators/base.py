@@ -3,11 +3,17 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
 
+from pvcloth.physics.stability import stiffest_mode
+from pvcloth.physics.state import Control, State
 from pvcloth.scene.spec import INTEGRATOR_NAMES
+
+if TYPE_CHECKING:  # for annotations only: the model module imports no integrator
+    from pvcloth.physics.model import Model
 
 #: Name -> integrator class. Filled by :func:`register`.
 INTEGRATORS: dict[str, type[Integrator]] = {}
@@ -47,7 +53,7 @@ class Integrator(ABC):
     description: str = ""
     _forces: np.ndarray | None = None  # reused (N, 3) force buffer, newtons
 
-    def forces(self, model, state) -> np.ndarray:
+    def forces(self, model: Model, state: State) -> np.ndarray:
         """The total force at ``state``, in a buffer this integrator reuses
         from step to step (valid until its next call)."""
         if self._forces is None or self._forces.shape != state.x.shape:
@@ -55,7 +61,14 @@ class Integrator(ABC):
         return model.compute_forces(state.x, state.v, out=self._forces)
 
     @abstractmethod
-    def step(self, model, state, control, dt: float, out=None):
+    def step(
+        self,
+        model: Model,
+        state: State,
+        control: Control,
+        dt: float,
+        out: State | None = None,
+    ) -> State:
         """Return the :class:`~pvcloth.physics.state.State` one step ``dt`` later.
 
         ``out``, if given, is a state of the same shape whose arrays the
@@ -64,12 +77,10 @@ class Integrator(ABC):
         integrator may also ignore it and return new arrays. ``state`` is
         never changed."""
 
-    def stable_dt(self, model, state, control) -> float:
+    def stable_dt(self, model: Model, state: State, control: Control) -> float:
         """Largest stable time step near ``state``: this integrator's own step
         applied to the cloth's stiffest mode (see :func:`largest_stable_step`).
         ``inf`` if no step is too large, 0 if none is small enough."""
-        from pvcloth.physics.stability import stiffest_mode
-
         mode = stiffest_mode(model, state.x, state.v, control.inv_mass)
         return largest_stable_step(type(self), mode.omega, mode.alpha)
 
@@ -87,8 +98,6 @@ class Integrator(ABC):
 
 def reuse_or_allocate(out, state):
     """``out`` if there is one, else a new state shaped like ``state``."""
-    from pvcloth.physics.state import State
-
     if out is None:
         return State(np.empty_like(state.x), np.empty_like(state.v), state.t)
     return out
@@ -116,14 +125,19 @@ class _ModalOscillator:
             3, format="csr"
         )
 
+    def kick_drift(self, x, v, f, inv_mass, dt, x_out, v_out):
+        np.multiply(f, inv_mass[:, None], out=f)
+        np.multiply(f, dt, out=v_out)
+        v_out += v
+        np.multiply(v_out, dt, out=x_out)
+        x_out += x
+
 
 def step_matrix(integrator_class, omega: float, alpha: float, dt: float) -> np.ndarray:
     """The 2x2 matrix that maps ``(x, v)`` to the next step's ``(x, v)`` for
     one integrator on one damped mode."""
-    from pvcloth.physics.state import Control, State
-
     model = _ModalOscillator(omega, alpha)
-    control = Control(np.zeros(1, bool), np.zeros((1, 3)), np.ones(1))
+    control = Control(np.ones(1), np.zeros(1, bool), np.zeros((1, 3)))
     integrator = integrator_class()  # fresh: no warm start carried into the probe
     columns = []
     for x0, v0 in ((1.0, 0.0), (0.0, 1.0)):

@@ -2,9 +2,15 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from pvcloth.physics.integrators.base import Integrator, register, reuse_or_allocate
+from pvcloth.physics.state import Control, State
+
+if TYPE_CHECKING:  # for annotations only: the model module imports no integrator
+    from pvcloth.physics.model import Model
 
 
 @register
@@ -20,7 +26,14 @@ class ExplicitEuler(Integrator):
     order = 1
     description = "forward Euler; 1st order, gains energy, needs damping"
 
-    def step(self, model, state, control, dt, out=None):
+    def step(
+        self,
+        model: Model,
+        state: State,
+        control: Control,
+        dt: float,
+        out: State | None = None,
+    ) -> State:
         new = reuse_or_allocate(out, state)
         a = self.forces(model, state)
         a *= control.inv_mass[:, None]

@@ -4,12 +4,17 @@ prefactorised matrix."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from pvcloth.physics.integrators.base import Integrator, register
-from pvcloth.physics.state import State
+from pvcloth.physics.state import Control, State
+
+if TYPE_CHECKING:  # for annotations only: the model module imports no integrator
+    from pvcloth.physics.model import Model
 
 
 @register
@@ -46,28 +51,26 @@ class FastMassSpring(Integrator):
         self.iterations = iterations
         self._key = None
 
-    def stable_dt(self, model, state, control) -> float:
+    def stable_dt(self, model: Model, state: State, control: Control) -> float:
         return float("inf")  # each iteration lowers a bounded-below energy
 
     # -- the constant parts ------------------------------------------------------
 
     def _prepare(self, model, control, dt: float) -> None:
-        groups = [g for family in model.springs for g in family.groups]
-        k = np.concatenate([g.stiffness.ravel() for g in groups]) if groups else np.zeros(0)
-        key = (dt, control.pinned.tobytes(), k.tobytes())
+        # Rebuilt when the step, a spring constant (model.revision) or the
+        # pinned set (control.revision) changed: integers, no array compared.
+        key = (dt, id(model), model.revision, id(control), control.revision)
         if key == self._key:
             return
+        springs = model.spring_table()
         n = model.n_points
-        ia = np.concatenate([g.ia for g in groups]) if groups else np.zeros(0, int)
-        ib = np.concatenate([g.ib for g in groups]) if groups else np.zeros(0, int)
-        rest = np.concatenate([g.rest.ravel() for g in groups]) if groups else np.zeros(0)
-        # Incidence: row s of G is e_a - e_b for spring s (a = ia, b = ib).
-        s = np.arange(ia.size)
+        # Incidence: row s of G is e_a - e_b for spring s.
+        s = np.arange(springs.count)
         incidence = sp.csr_matrix(
-            (np.r_[np.ones(s.size), -np.ones(s.size)], (np.r_[s, s], np.r_[ia, ib])),
+            (np.r_[np.ones(s.size), -np.ones(s.size)], (np.r_[s, s], np.r_[springs.a, springs.b])),
             shape=(s.size, n),
         )
-        weighted = incidence.T @ sp.diags(k)  # J = G^T diag(k): (n, springs)
+        weighted = incidence.T @ sp.diags(springs.stiffness)  # J = G^T diag(k): (n, springs)
         laplacian = (weighted @ incidence).tocsr()  # K = G^T diag(k) G
         system = sp.diags(model.mass) + dt * dt * laplacian
         free = np.flatnonzero(~control.pinned)
@@ -76,20 +79,24 @@ class FastMassSpring(Integrator):
         self._coupling = system[free][:, fixed].tocsr()  # moves pinned points to the rhs
         self._lu = splu(system[free][:, free].tocsc())
         self._jacobian = (dt * dt * weighted).tocsr()[free]
-        self._ia, self._ib, self._rest = ia, ib, rest
+        self._ia, self._ib, self._rest = springs.a, springs.b, springs.rest
         self._key = key
 
     # -- a step ---------------------------------------------------------------------
 
-    def step(self, model, state, control, dt, out=None):
-        from pvcloth.physics.forces import Springs
-
+    def step(
+        self,
+        model: Model,
+        state: State,
+        control: Control,
+        dt: float,
+        out: State | None = None,
+    ) -> State:
         self._prepare(model, control, dt)
         x, v = state.x, state.v
         other = np.zeros_like(x)
-        for term in model.forces:
-            if not isinstance(term, Springs):
-                term.accumulate(x, v, other)
+        for term in model.other_forces:
+            term.accumulate(x, v, other)
         y = x + dt * v + dt * dt * other * control.inv_mass[:, None]
         free, fixed = self._free, self._fixed
         pinned_next = x[fixed] + dt * v[fixed]  # the simulation set their velocity

@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import cg, spsolve
 
 from pvcloth.errors import DivergenceError
 from pvcloth.physics.integrators.base import Integrator, register
-from pvcloth.physics.state import State
+from pvcloth.physics.state import Control, State
+
+if TYPE_CHECKING:  # for annotations only: the model module imports no integrator
+    from pvcloth.physics.model import Model
 
 
 @register
@@ -43,13 +48,20 @@ class ImplicitEuler(Integrator):
         self._last_dv: np.ndarray | None = None
         self.direct_solves = 0  # steps where CG stalled and a factorisation answered
 
-    def get_state(self):
+    def get_state(self) -> dict[str, np.ndarray]:
         return {} if self._last_dv is None else {"last_dv": self._last_dv.copy()}
 
-    def set_state(self, state):
+    def set_state(self, state: dict[str, np.ndarray]) -> None:
         self._last_dv = state.get("last_dv")
 
-    def step(self, model, state, control, dt, out=None):
+    def step(
+        self,
+        model: Model,
+        state: State,
+        control: Control,
+        dt: float,
+        out: State | None = None,
+    ) -> State:
         x, v = state.x, state.v
         f = model.compute_forces(x, v).ravel()
         dfdx, dfdv = model.jacobians(x, v)

@@ -2,8 +2,13 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from pvcloth.physics.integrators.base import Integrator, register
-from pvcloth.physics.state import State
+from pvcloth.physics.state import Control, State
+
+if TYPE_CHECKING:  # for annotations only: the model module imports no integrator
+    from pvcloth.physics.model import Model
 
 
 @register
@@ -19,7 +24,14 @@ class RungeKutta4(Integrator):
     order = 4
     description = "classical Runge-Kutta; 4th order, 4 force evaluations"
 
-    def step(self, model, state, control, dt, out=None):
+    def step(
+        self,
+        model: Model,
+        state: State,
+        control: Control,
+        dt: float,
+        out: State | None = None,
+    ) -> State:
         inv_mass = control.inv_mass[:, None]
 
         def acceleration(x, v):

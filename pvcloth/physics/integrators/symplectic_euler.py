@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
-import numpy as np
+from typing import TYPE_CHECKING
 
 from pvcloth.physics.integrators.base import Integrator, register, reuse_or_allocate
+from pvcloth.physics.state import Control, State
+
+if TYPE_CHECKING:  # for annotations only: the model module imports no integrator
+    from pvcloth.physics.model import Model
 
 
 @register
@@ -22,21 +26,16 @@ class SymplecticEuler(Integrator):
     order = 1
     description = "semi-implicit Euler; 1st order, bounded energy error"
 
-    def step(self, model, state, control, dt, out=None):
+    def step(
+        self,
+        model: Model,
+        state: State,
+        control: Control,
+        dt: float,
+        out: State | None = None,
+    ) -> State:
         f = self.forces(model, state)
         new = reuse_or_allocate(out, state)
-        if getattr(model, "compiled", False):
-            from pvcloth.physics.kernels import kick_drift
-
-            new.checked = kick_drift(
-                state.x, state.v, f, control.inv_mass, dt, new.x, new.v, model.shape
-            )
-        else:
-            f *= control.inv_mass[:, None]
-            np.multiply(f, dt, out=new.v)
-            new.v += state.v
-            np.multiply(new.v, dt, out=new.x)
-            new.x += state.x
-            new.checked = None
+        new.checked = model.kick_drift(state.x, state.v, f, control.inv_mass, dt, new.x, new.v)
         new.t = state.t + dt
         return new

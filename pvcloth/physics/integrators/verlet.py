@@ -2,8 +2,15 @@
 
 from __future__ import annotations
 
-from pvcloth.physics.integrators.base import Integrator, register
-from pvcloth.physics.state import State
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from pvcloth.physics.integrators.base import Integrator, register, reuse_or_allocate
+from pvcloth.physics.state import Control, State
+
+if TYPE_CHECKING:  # for annotations only: the model module imports no integrator
+    from pvcloth.physics.model import Model
 
 
 @register
@@ -23,10 +30,34 @@ class VelocityVerlet(Integrator):
     order = 2
     description = "velocity Verlet; 2nd order, symplectic, 2 force evaluations"
 
-    def step(self, model, state, control, dt, out=None):
-        inv_mass = control.inv_mass[:, None]
-        kick = 0.5 * dt * inv_mass * model.compute_forces(state.x, state.v)
-        half = state.v + kick
-        x = state.x + dt * half
-        v = half + 0.5 * dt * inv_mass * model.compute_forces(x, half + kick)
-        return State(x, v, state.t + dt)
+    def step(
+        self,
+        model: Model,
+        state: State,
+        control: Control,
+        dt: float,
+        out: State | None = None,
+    ) -> State:
+        # The same arithmetic as v+ = v + kick, x' = x + h v+, v' = v+ + h/2
+        # a(x', v+ + kick), written into held buffers and the spare state:
+        # nothing allocated per step but the (N, 1) scale.
+        new = reuse_or_allocate(out, state)
+        kick, predicted = self._buffers(state.x)
+        scale = 0.5 * dt * control.inv_mass[:, None]
+        np.multiply(scale, self.forces(model, state), out=kick)
+        half = new.v  # v+ lives in the output's velocity until the last kick
+        np.add(state.v, kick, out=half)
+        np.multiply(half, dt, out=new.x)
+        new.x += state.x
+        np.add(half, kick, out=predicted)
+        f = model.compute_forces(new.x, predicted, out=self._forces)
+        np.multiply(scale, f, out=kick)
+        half += kick
+        new.t = state.t + dt
+        new.checked = None
+        return new
+
+    def _buffers(self, like: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if getattr(self, "_scratch", None) is None or self._scratch[0].shape != like.shape:
+            self._scratch = (np.empty_like(like), np.empty_like(like))
+        return self._scratch
