@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import scipy.sparse as sp
@@ -27,21 +28,40 @@ import scipy.sparse as sp
 TINY_LENGTH = 1e-12
 
 
+#: A sparse ``(3N, 3N)`` Jacobian block, or ``None`` for a zero one.
+Jacobian = sp.csr_matrix | None
+
+
+class ForceTerm(Protocol):
+    """What every force term offers (see the module docstring); springs
+    (:class:`pvcloth.physics.springs.Springs`) are one."""
+
+    name: str
+
+    def accumulate(self, x: np.ndarray, v: np.ndarray, f: np.ndarray) -> None: ...
+
+    def potential_energy(self, x: np.ndarray) -> float: ...
+
+    def jacobians(self, x: np.ndarray, v: np.ndarray) -> tuple[Jacobian, Jacobian]: ...
+
+    def describe(self) -> str: ...
+
+
 @dataclass
 class Gravity:
     """Uniform gravity: ``f += m g``."""
 
-    acceleration: np.ndarray
-    mass: np.ndarray  # (N,)
+    acceleration: np.ndarray  # (3,), m/s^2
+    mass: np.ndarray  # (N,), kg
     name: str = "gravity"
 
-    def accumulate(self, x, v, f) -> None:
+    def accumulate(self, x: np.ndarray, v: np.ndarray, f: np.ndarray) -> None:
         f += self.mass[:, None] * self.acceleration
 
-    def potential_energy(self, x) -> float:
+    def potential_energy(self, x: np.ndarray) -> float:
         return float(-(self.mass @ x) @ self.acceleration)
 
-    def jacobians(self, x, v):
+    def jacobians(self, x: np.ndarray, v: np.ndarray) -> tuple[Jacobian, Jacobian]:
         return None, None
 
     def describe(self) -> str:
@@ -53,16 +73,16 @@ class AirDamping:
     """Linear drag on absolute velocity: ``f -= gamma m v``."""
 
     rate: float  # gamma, 1/s
-    mass: np.ndarray
+    mass: np.ndarray  # (N,), kg
     name: str = "air damping"
 
-    def accumulate(self, x, v, f) -> None:
+    def accumulate(self, x: np.ndarray, v: np.ndarray, f: np.ndarray) -> None:
         f -= (self.rate * self.mass)[:, None] * v
 
-    def potential_energy(self, x) -> float:
+    def potential_energy(self, x: np.ndarray) -> float:
         return 0.0
 
-    def jacobians(self, x, v):
+    def jacobians(self, x: np.ndarray, v: np.ndarray) -> tuple[Jacobian, Jacobian]:
         diag = np.repeat(-self.rate * self.mass, 3)
         return None, sp.diags(diag, format="csr")
 
@@ -141,7 +161,7 @@ class Wind:
         ny, nx = self.shape
         return [a3[dj : ny - 1 + dj, di : nx - 1 + di] for dj, di in triangle]
 
-    def accumulate(self, x, v, f) -> None:
+    def accumulate(self, x: np.ndarray, v: np.ndarray, f: np.ndarray) -> None:
         x3, v3, f3 = (arr.reshape(self.shape + (3,)) for arr in (x, v, f))
         for triangle in self.TRIANGLES:
             p0, p1, p2 = self._corners(x3, triangle)
@@ -163,10 +183,10 @@ class Wind:
             for corner in self._corners(f3, triangle):
                 corner += share
 
-    def potential_energy(self, x) -> float:
+    def potential_energy(self, x: np.ndarray) -> float:
         return 0.0
 
-    def jacobians(self, x, v):
+    def jacobians(self, x: np.ndarray, v: np.ndarray) -> tuple[Jacobian, Jacobian]:
         return None, None
 
     def describe(self) -> str:

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from pvcloth.physics.forces import AirDamping, Gravity, Wind
+from pvcloth.physics.forces import AirDamping, ForceTerm, Gravity, Wind
 from pvcloth.physics.grid import initial_positions, lumped_masses
 from pvcloth.physics.kernels import (
     SpringPlan,
@@ -77,13 +77,13 @@ class Model:
         return self.mass.size
 
     @property
-    def forces(self) -> list:
+    def forces(self) -> list[ForceTerm]:
         """Every force term, springs first."""
         others = [self.gravity, self.air, self.wind]
         return [*self.springs, *(term for term in others if term is not None)]
 
     @property
-    def other_forces(self) -> list:
+    def other_forces(self) -> list[ForceTerm]:
         """The force terms that are not springs (gravity, air damping, wind)."""
         return [term for term in (self.gravity, self.air, self.wind) if term is not None]
 

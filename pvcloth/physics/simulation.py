@@ -70,6 +70,31 @@ class Simulation:
         ``PVCLOTH_BACKEND`` or ``"auto"``: numba when installed). Both give
         the same results to round-off.
 
+    Attributes
+    ----------
+    scene : Scene
+        What runs, live edits included (:meth:`update`): the one source of
+        truth, saved by checkpoints.
+    model : Model
+        The constants: grid, masses, force terms, obstacles.
+    state : State
+        The current positions ``(N, 3)`` m, velocities ``(N, 3)`` m/s and
+        time s. Each step makes a new current state (in the memory of the
+        one before last, when nobody else holds that): a state you hold is
+        never written again, so another thread may read it.
+    control : Control
+        Pins and their targets.
+    integrator : Integrator
+    dt : float
+        The step taken, seconds (``scene.solver.dt`` or a substep of it, or
+        the automatic step).
+    steps : int
+        Steps taken since the start.
+    owed : float
+        Seconds asked for but not yet stepped (less than ``dt``).
+    stiffness_scale : float
+        Springs relative to the scene's at the start.
+
     Raises
     ------
     SceneError

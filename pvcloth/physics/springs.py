@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from pvcloth.physics.forces import TINY_LENGTH
+from pvcloth.physics.forces import TINY_LENGTH, Jacobian
 from pvcloth.physics.grid import SPRING_OFFSETS, border_factor, pair_slices
 
 
@@ -243,7 +243,7 @@ class Springs:
             total += 0.5 * float(np.sum(g.stiffness * (length - g.rest) ** 2))
         return total
 
-    def jacobians(self, x: np.ndarray, v: np.ndarray):
+    def jacobians(self, x: np.ndarray, v: np.ndarray) -> tuple[Jacobian, Jacobian]:
         """Force Jacobians ``(dF/dx, dF/dv)``, sparse ``(3N, 3N)``. The
         transverse (geometric) stiffness is clamped at zero for compressed
         springs, as Choi and Ko (2002) do, so that ``-dF/dx`` stays positive

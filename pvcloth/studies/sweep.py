@@ -84,20 +84,20 @@ def parse_values(key: str, spec: str) -> list:
         try:
             low, high = float(start), float(stop)
         except ValueError:
-            raise SweepError(f"--set {key}: range ends must be numbers, got {spec!r}") from None
+            raise SweepError(f"{key}: range ends must be numbers, got {spec!r}") from None
         count = int(count)
         if count < 1:
-            raise SweepError(f"--set {key}: a range needs at least 1 value, got {count}")
+            raise SweepError(f"{key}: a range needs at least 1 value, got {count}")
         if kind == "log":
             if low <= 0 or high <= 0:
-                raise SweepError(f"--set {key}: a log range needs positive ends, got {spec!r}")
+                raise SweepError(f"{key}: a log range needs positive ends, got {spec!r}")
             values = np.geomspace(low, high, count)
         else:
             values = np.linspace(low, high, count)
         return [float(f"{v:.12g}") for v in values]
     values = [parse_value(item) for item in spec.split(",") if item.strip()]
     if not values:
-        raise SweepError(f"--set {key}: no values given")
+        raise SweepError(f"{key}: no values given")
     return values
 
 
@@ -107,10 +107,10 @@ def parse_sets(items: list[str]) -> dict[str, list]:
     for item in items:
         key, sep, spec = item.partition("=")
         if not sep or not key.strip():
-            raise SweepError(f"--set expects KEY=VALUES, got {item!r}")
+            raise SweepError(f"expected KEY=VALUES, got {item!r}")
         key = key.strip()
         if key in sets:
-            raise SweepError(f"--set {key} is given twice")
+            raise SweepError(f"{key} is given twice")
         sets[key] = parse_values(key, spec)
     return sets
 
@@ -155,7 +155,7 @@ def expand(scene: Scene, sets: dict[str, list]) -> list[Unit]:
             units.append(Unit(settings, scene.with_overrides(settings)))
         except SceneError as error:
             raise SceneError(
-                error.key, f"{error.message} (from --set {', '.join(keys)} = {values})"
+                error.key, f"{error.message} (from the settings {', '.join(keys)} = {values})"
             ) from None
     return units
 
@@ -406,7 +406,7 @@ def plot(rows: list[dict], sets: dict[str, list], path: Path, axes: list[str] | 
         axes = keys[:2] or [next(iter(sets))]
     for key in axes:
         if key not in sets:
-            raise SweepError(f"--axes {key}: not a swept key (swept: {', '.join(sets)})")
+            raise SweepError(f"axes: {key} is not a swept key (swept: {', '.join(sets)})")
     integrators = sorted({r["integrator"] for r in rows})
     fig = Figure(figsize=(3.6 * (len(integrators) + 1), 3.6), dpi=100)
     panels = fig.subplots(1, len(integrators) + 1, squeeze=False)
