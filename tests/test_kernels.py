@@ -229,3 +229,20 @@ def test_frames_do_not_slow_down_or_grow_memory_on_any_threading_layer(layer):
         if late <= 1.2 * early:
             return
     raise AssertionError(f"{layer}: frames went from {early * 1e3:.1f} to {late * 1e3:.1f} ms")
+
+
+def test_the_compiled_local_step_of_liu_et_al_sums_what_numpy_sums(rng):
+    from pvcloth.physics.kernels import spring_projection, spring_projection_numpy
+
+    sim = Simulation(small_scene(9))
+    table = sim.model.spring_table()
+    x = sim.model.rest_positions + 0.05 * rng.standard_normal(sim.model.rest_positions.shape)
+    x[7] = x[8]  # a spring of zero length: no direction, no pull (not NaN)
+    weight = rng.random(table.count)
+    compiled, reference = np.empty_like(x), np.empty_like(x)
+    spring_projection(x, table.a, table.b, table.rest, weight, compiled)
+    spring_projection_numpy(x, table.a, table.b, table.rest, weight, reference)
+    assert np.isfinite(compiled).all()
+    np.testing.assert_allclose(compiled, reference, rtol=1e-12, atol=1e-14)
+    # each spring's pull is equal and opposite at its ends: nothing net
+    np.testing.assert_allclose(compiled.sum(axis=0), 0.0, atol=1e-12)

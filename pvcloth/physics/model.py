@@ -20,6 +20,8 @@ from pvcloth.physics.kernels import (
     kick_drift,
     resolve_backend,
     spring_forces,
+    spring_projection,
+    spring_projection_numpy,
 )
 from pvcloth.physics.obstacles import build_obstacle
 from pvcloth.physics.springs import Springs, SpringTable
@@ -70,6 +72,7 @@ class Model:
 
     def __post_init__(self):
         self.revision = 0
+        self._table: SpringTable | None = None
         self._plan = SpringPlan(self.springs, self.shape) if self.backend == "numba" else None
 
     @property
@@ -88,8 +91,20 @@ class Model:
         return [term for term in (self.gravity, self.air, self.wind) if term is not None]
 
     def spring_table(self) -> SpringTable:
-        """Every spring of every family as one flat table."""
-        return SpringTable.join([family.table() for family in self.springs])
+        """Every spring of every family as one flat table (kept until the
+        constants change)."""
+        if self._table is None:
+            self._table = SpringTable.join([family.table() for family in self.springs])
+        return self._table
+
+    def spring_projection(self, x: np.ndarray, weight: np.ndarray, out: np.ndarray) -> None:
+        """Liu et al.'s local step summed onto the points, into ``out``
+        ``(N, 3)``: every spring of :meth:`spring_table` projected to its rest
+        length along its current direction at ``x`` (m), times ``weight``
+        (one per spring), added at its end a and taken from its end b."""
+        table = self.spring_table()
+        project = spring_projection if self._plan is not None else spring_projection_numpy
+        project(x, table.a, table.b, table.rest, weight, out)
 
     @property
     def compiled(self) -> bool:
@@ -144,6 +159,7 @@ class Model:
         self.gravity, self.air, self.wind = _body_terms(scene, self.mass, self.shape)
         if self._plan is not None:
             self._plan.refresh()
+        self._table = None
         self.revision += 1
 
     def set_time(self, t: float) -> None:

@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from pvcloth.errors import SceneError
+from pvcloth.scene.materials import expand_material, preset
 from pvcloth.scene.overrides import assign, expand
 from pvcloth.scene.validation import check_keys, choice, integer, real, sequence, vector
 
@@ -540,6 +541,8 @@ class Scene:
         """
         if isinstance(data, Mapping) and any(isinstance(k, str) and "." in k for k in data):
             data = expand(data)  # dotted keys, as --set and sweeps write them
+        if isinstance(data, Mapping):
+            data = expand_material(dict(data))  # cloth.material: a fabric preset
         data = dict(check_keys("", data, [f.name for f in fields(cls)]))
         if name is not None:
             data["name"] = name
@@ -587,6 +590,10 @@ class Scene:
         """
         if not changes:
             return self
+        if "cloth.material" in changes:  # the preset first, then what else is given
+            size = changes.get("cloth.size", self.cloth.size)
+            rest = {k: v for k, v in changes.items() if k != "cloth.material"}
+            changes = {**preset(changes["cloth.material"], tuple(size)), **rest}
         data = self.to_dict()
         for key, value in changes.items():
             assign(data, key, value)

@@ -36,9 +36,11 @@ def check_keys(key: str, data: object, allowed: Iterable[str]) -> Mapping:
             if isinstance(name, str):
                 close = difflib.get_close_matches(name, allowed, n=1)
                 if close:
-                    hint = f"; did you mean {close[0]!r}?"
+                    hint = f" (did you mean {close[0]!r}?)"
             where = f"{key}.{name}" if key else str(name)
-            raise SceneError(where, f"unknown key{hint} Allowed here: {', '.join(sorted(allowed))}")
+            raise SceneError(
+                where, f"unknown key{hint}. Allowed here: {', '.join(sorted(allowed))}"
+            )
     return data
 
 
@@ -105,6 +107,6 @@ def choice(
         raise error(key, f"expected one of {', '.join(allowed)}; got {describe(value)}")
     if value not in allowed:
         close = difflib.get_close_matches(value, allowed, n=1)
-        hint = f"; did you mean {close[0]!r}?" if close else ""
-        raise error(key, f"{value!r} is not allowed{hint} Choose one of: {', '.join(allowed)}")
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise error(key, f"{value!r} is not allowed{hint}. Choose one of: {', '.join(allowed)}")
     return value

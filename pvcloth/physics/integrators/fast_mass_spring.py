@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
+from cholespy import CholeskySolverD, MatrixType
 
 from pvcloth.physics.integrators.base import Integrator, register
 from pvcloth.physics.state import Control, State
@@ -34,8 +34,10 @@ class FastMassSpring(Integrator):
 
     Spring dashpots are not modelled by the method (only air damping, gravity,
     wind and other non-spring forces, taken explicitly in ``y``); pinned points
-    are held by leaving them out of the solve, and the factorisation is redone
-    when the set of pinned points (or a stiffness) changes.
+    are held by leaving them out of the solve, and the factorisation (a sparse
+    Cholesky factor, cholespy) is redone when the set of pinned points or a
+    stiffness changes. The local step runs in a compiled loop over the spring
+    table (NumPy on the NumPy backend).
 
     Parameters
     ----------
@@ -56,7 +58,7 @@ class FastMassSpring(Integrator):
 
     # -- the constant parts ------------------------------------------------------
 
-    def _prepare(self, model, control, dt: float) -> None:
+    def _prepare(self, model: Model, control: Control, dt: float) -> None:
         # Rebuilt when the step, a spring constant (model.revision) or the
         # pinned set (control.revision) changed: integers, no array compared.
         key = (dt, id(model), model.revision, id(control), control.revision)
@@ -70,16 +72,28 @@ class FastMassSpring(Integrator):
             (np.r_[np.ones(s.size), -np.ones(s.size)], (np.r_[s, s], np.r_[springs.a, springs.b])),
             shape=(s.size, n),
         )
-        weighted = incidence.T @ sp.diags(springs.stiffness)  # J = G^T diag(k): (n, springs)
-        laplacian = (weighted @ incidence).tocsr()  # K = G^T diag(k) G
-        system = sp.diags(model.mass) + dt * dt * laplacian
+        laplacian = (incidence.T @ sp.diags(springs.stiffness) @ incidence).tocsr()  # G^T K G
+        system = (sp.diags(model.mass) + dt * dt * laplacian).tocsr()
         free = np.flatnonzero(~control.pinned)
         fixed = np.flatnonzero(control.pinned)
         self._free, self._fixed = free, fixed
         self._coupling = system[free][:, fixed].tocsr()  # moves pinned points to the rhs
-        self._lu = splu(system[free][:, free].tocsc())
-        self._jacobian = (dt * dt * weighted).tocsr()[free]
-        self._ia, self._ib, self._rest = springs.a, springs.b, springs.rest
+        matrix = system[free][:, free].tocsr()
+        matrix.sort_indices()
+        # A sparse Cholesky factor (CHOLMOD inside cholespy): the matrix is
+        # symmetric positive definite; its solves cost a third of SuperLU's
+        # here (64x64: 0.29 against 0.89 ms for three right-hand sides).
+        self._factor = CholeskySolverD(
+            free.size,
+            matrix.indptr.astype(np.int32),
+            matrix.indices.astype(np.int32),
+            matrix.data,
+            MatrixType.CSR,
+        )
+        self._weight = dt * dt * springs.stiffness  # h^2 k per spring
+        self._pull = np.empty((n, 3))
+        self._rhs = np.empty((free.size, 3))
+        self._solution = np.empty((free.size, 3))
         self._key = key
 
     # -- a step ---------------------------------------------------------------------
@@ -101,13 +115,15 @@ class FastMassSpring(Integrator):
         free, fixed = self._free, self._fixed
         pinned_next = x[fixed] + dt * v[fixed]  # the simulation set their velocity
         rhs_base = model.mass[free, None] * y[free] - self._coupling @ pinned_next
-        guess = y.copy()
+        guess = y
         guess[fixed] = pinned_next
+        pull, rhs, solution = self._pull, self._rhs, self._solution
         for _ in range(self.iterations):
-            d = guess[self._ia] - guess[self._ib]
-            length = np.linalg.norm(d, axis=1)
-            d *= (self._rest / np.maximum(length, 1e-12))[:, None]
-            rhs = rhs_base + self._jacobian @ d
-            guess[free] = self._lu.solve(rhs)
+            # local: every spring at its rest length along its current
+            # direction (h^2 k L u, summed at its ends); global: one solve.
+            model.spring_projection(guess, self._weight, pull)
+            np.add(rhs_base, pull[free], out=rhs)
+            self._factor.solve(rhs, solution)
+            guess[free] = solution
         v_new = (guess - x) / dt
         return State(guess, v_new, state.t + dt)
