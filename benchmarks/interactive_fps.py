@@ -11,13 +11,15 @@ step, or 1/60 s for implicit ones), lets it run, and measures:
 - the longest physics chunk (work that runs beside the drawing).
 
 Run:  xvfb-run -a -s "-screen 0 1280x1024x24" python benchmarks/interactive_fps.py
-      [--sizes 32 64] [--seconds 6] [--integrators ...] [--out FILE]
+      [--scene data/scenes/hanging.toml] [--sizes 32 64] [--seconds 6]
+      [--integrators ...] [--out FILE]
       (writes benchmarks/results/interactive_fps.md)
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -66,12 +68,15 @@ def measure(scene, integrator: str, seconds: float) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--scene", type=Path, default=HERE.parent / "data" / "scenes" / "hanging.toml"
+    )
     parser.add_argument("--sizes", type=int, nargs="+", default=[32, 64])
     parser.add_argument("--seconds", type=float, default=6.0)
     parser.add_argument("--integrators", nargs="+", default=sorted(pvcloth.INTEGRATORS))
     parser.add_argument("--out", type=Path, default=HERE / "results" / "interactive_fps.md")
     args = parser.parse_args()
-    base = pvcloth.load_scene(HERE.parent / "data" / "scenes" / "hanging.toml")
+    base = pvcloth.load_scene(args.scene)
     rows = []
     for n in args.sizes:
         for integrator in args.integrators:
@@ -80,9 +85,10 @@ def main() -> None:
     lines = [
         "# The interactive window, by the wall clock",
         "",
-        '`xvfb-run -a -s "-screen 0 1280x1024x24" python benchmarks/interactive_fps.py`: '
+        '`xvfb-run -a -s "-screen 0 1280x1024x24" python benchmarks/interactive_fps.py'
+        f"{''.join(' ' + a for a in sys.argv[1:])}`: "
         f"the real window (1024x768, Xvfb, Mesa llvmpipe, its own 30 fps timer) on the "
-        f"hanging scene, {args.seconds:g} s measured after {WARM_UP:g} s of warm-up, each "
+        f"{base.name} scene, {args.seconds:g} s measured after {WARM_UP:g} s of warm-up, each "
         "integrator at the step the window gives it. fps is frames drawn over wall "
         "seconds; the worst interval is the longest wait between two frames; real time "
         "is simulated over wall seconds (1 = real time; below it the window runs in slow "

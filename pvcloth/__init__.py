@@ -18,19 +18,6 @@ from pvcloth.errors import (
     SweepError,
 )
 
-# The scene layer is light (no NumPy): its types are imported at once.
-from pvcloth.scene.spec import (
-    ClothSpec,
-    ObstacleSpec,
-    PinSpec,
-    Scene,
-    SolverSpec,
-    SpringSpec,
-    SpringsSpec,
-    WindSpec,
-    load_scene,
-)
-
 try:  # one source for the version: the installed package's metadata (pyproject.toml)
     __version__ = _metadata.version("pvcloth")
 except _metadata.PackageNotFoundError:  # running from a source tree that was never installed
@@ -46,6 +33,11 @@ _LAZY = {
         for name in ("INTEGRATORS", "Integrator", "get_integrator")
     },
     **{name: ("physics.model", name) for name in ("Model", "build_model")},
+    **{
+        name: ("scene.spec", name)
+        for name in ("ClothSpec", "ObstacleSpec", "PinSpec", "Scene", "SolverSpec")
+        + ("SpringSpec", "SpringsSpec", "WindSpec", "load_scene")
+    },
     "Simulation": ("physics.simulation", "Simulation"),
     **{name: ("physics.state", name) for name in ("Control", "State")},
     "render": ("visual.movie", "render"),

@@ -23,6 +23,7 @@ ROOT = Path(__file__).resolve().parent.parent
 RUNS = {
     "cpu_speed.py": (["--sizes", "8", "--rounds", "1"], "cpu_speed.md"),
     "environment_cost.py": ([], "environment_cost.md"),
+    "fabric_speed.py": ([], "fabric_speed.md"),
     "finite_check.py": ([], "finite_check.md"),
     "fuzz.py": (["--examples", "3"], "fuzz.md"),
     "implicit_crossover.py": (

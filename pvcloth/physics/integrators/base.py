@@ -62,12 +62,7 @@ class Integrator(ABC):
 
     @abstractmethod
     def step(
-        self,
-        model: Model,
-        state: State,
-        control: Control,
-        dt: float,
-        out: State | None = None,
+        self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
         """Return the :class:`~pvcloth.physics.state.State` one step ``dt`` later.
 

@@ -22,17 +22,11 @@ class ExplicitEuler(Integrator):
     with damping it is stable while ``h < 2 alpha / omega^2`` for each mode.
     """
 
-    name = "explicit_euler"
-    order = 1
+    name, order = "explicit_euler", 1  # registry key; global order of accuracy
     description = "forward Euler; 1st order, gains energy, needs damping"
 
     def step(
-        self,
-        model: Model,
-        state: State,
-        control: Control,
-        dt: float,
-        out: State | None = None,
+        self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
         new = reuse_or_allocate(out, state)
         a = self.forces(model, state)

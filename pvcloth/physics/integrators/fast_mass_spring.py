@@ -45,8 +45,7 @@ class FastMassSpring(Integrator):
         Local/global iterations per step (Liu et al. use about 10).
     """
 
-    name = "fast_mass_spring"
-    order = 1
+    name, order = "fast_mass_spring", 1  # registry key; global order of accuracy
     description = "Liu et al. 2013 local/global backward Euler, prefactorised; damps"
 
     def __init__(self, iterations: int = 10):
@@ -99,12 +98,7 @@ class FastMassSpring(Integrator):
     # -- a step ---------------------------------------------------------------------
 
     def step(
-        self,
-        model: Model,
-        state: State,
-        control: Control,
-        dt: float,
-        out: State | None = None,
+        self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
         self._prepare(model, control, dt)
         x, v = state.x, state.v

@@ -38,8 +38,7 @@ class ImplicitEuler(Integrator):
         Relative tolerance of the conjugate-gradient solve.
     """
 
-    name = "implicit_euler"
-    order = 1
+    name, order = "implicit_euler", 1  # registry key; global order of accuracy
     description = "Baraff-Witkin backward Euler; 1st order, stable at large steps, damps"
 
     def __init__(self, rtol: float = 1e-8, maxiter: int = 2000):
@@ -55,12 +54,7 @@ class ImplicitEuler(Integrator):
         self._last_dv = state.get("last_dv")
 
     def step(
-        self,
-        model: Model,
-        state: State,
-        control: Control,
-        dt: float,
-        out: State | None = None,
+        self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
         x, v = state.x, state.v
         f = model.compute_forces(x, v).ravel()

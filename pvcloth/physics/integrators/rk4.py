@@ -20,17 +20,11 @@ class RungeKutta4(Integrator):
     symplectic).
     """
 
-    name = "rk4"
-    order = 4
+    name, order = "rk4", 4  # registry key; global order of accuracy
     description = "classical Runge-Kutta; 4th order, 4 force evaluations"
 
     def step(
-        self,
-        model: Model,
-        state: State,
-        control: Control,
-        dt: float,
-        out: State | None = None,
+        self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
         inv_mass = control.inv_mass[:, None]
 

@@ -22,17 +22,11 @@ class SymplecticEuler(Integrator):
     without damping), from the Jury conditions on its 2x2 step matrix.
     """
 
-    name = "symplectic_euler"
-    order = 1
+    name, order = "symplectic_euler", 1  # registry key; global order of accuracy
     description = "semi-implicit Euler; 1st order, bounded energy error"
 
     def step(
-        self,
-        model: Model,
-        state: State,
-        control: Control,
-        dt: float,
-        out: State | None = None,
+        self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
         f = self.forces(model, state)
         new = reuse_or_allocate(out, state)

@@ -26,23 +26,17 @@ class VelocityVerlet(Integrator):
     ``pvcloth tradeoff``).
     """
 
-    name = "verlet"
-    order = 2
+    name, order = "verlet", 2  # registry key; global order of accuracy
     description = "velocity Verlet; 2nd order, symplectic, 2 force evaluations"
 
     def step(
-        self,
-        model: Model,
-        state: State,
-        control: Control,
-        dt: float,
-        out: State | None = None,
+        self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
         # The same arithmetic as v+ = v + kick, x' = x + h v+, v' = v+ + h/2
         # a(x', v+ + kick), written into held buffers and the spare state:
         # nothing allocated per step but the (N, 1) scale.
-        new = reuse_or_allocate(out, state)
         kick, predicted = self._buffers(state.x)
+        new = reuse_or_allocate(out, state)
         scale = 0.5 * dt * control.inv_mass[:, None]
         np.multiply(scale, self.forces(model, state), out=kick)
         half = new.v  # v+ lives in the output's velocity until the last kick
