@@ -43,9 +43,9 @@ LIVE_KEYS = ("springs", "gravity", "air_damping", "wind", "solver")
 #: Most steps one call may take: hours of wall time even for a tiny cloth.
 MAX_STEPS = 10**7
 #: Peak bytes per cloth point while a simulation is built: the stable-step
-#: estimate's sparse Jacobians dominate (8.7 kB at 256x256, falling with size,
+#: estimate's sparse Jacobians dominate (9.2 kB at 256x256, falling with size,
 #: from `python benchmarks/memory.py`; stepping needs a tenth of it).
-PEAK_BYTES_PER_POINT = 8700
+PEAK_BYTES_PER_POINT = 9200
 
 
 class Simulation:
