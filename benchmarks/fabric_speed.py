@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import platform
 import statistics
+import sys
 import time
 from pathlib import Path
 
@@ -54,6 +55,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[8] if SMOKE else [64, 128])
     parser.add_argument("--seconds", type=float, default=0.1 if SMOKE else 0.5)
+    parser.add_argument("--methods", nargs="+", default=list(METHODS))
     parser.add_argument("--out", default=str(HERE / "results" / "fabric_speed.md"))
     args = parser.parse_args()
     base = pvcloth.load_scene(HERE.parent / "data" / "scenes" / "cotton.toml")
@@ -66,7 +68,7 @@ def main() -> None:
             scene, integrator="rk4", dt=dividing_step(duration, explicit), stability="ignore"
         )
         truth.advance(duration)
-        for name in METHODS:
+        for name in args.methods:
             result = run(
                 scene, name, args.seconds, explicit if name == "symplectic_euler" else None
             )
@@ -85,7 +87,8 @@ def main() -> None:
     lines = [
         "# Real fabric at frame steps",
         "",
-        f"`python benchmarks/fabric_speed.py` on {platform.node()}: the cotton scene "
+        f"`python benchmarks/fabric_speed.py{''.join(' ' + a for a in sys.argv[1:])}` on "
+        f"{platform.node()}: the cotton scene "
         "(1 m square, 2112 N/m stretch, 0.22 kg/m^2, two corners pinned), each method in "
         f"turn in one process, {args.seconds:g} s of cloth timed after {SETTLE:g} s. ms = "
         "median wall time per 1/60 s of cloth, everything included; real time = simulated "
