@@ -22,6 +22,7 @@ import dataclasses
 import math
 import os
 import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -41,6 +42,9 @@ DEFAULT_WIND = WindSpec(velocity=(0.0, 6.0, 0.0))
 #: Period of the event loop's timer (ms): frames are drawn on the ticks
 #: where one is due (see :meth:`ClothApp.tick`).
 TICK_MS = 5
+#: Characters per line of a message in the status text (fits the left two
+#: thirds of the window at its normalized font size).
+STATUS_COLUMNS = 90
 
 #: Keys the window answers, by VTK key symbol, with what they do. No other
 #: key acts (VTK's and PyVista's default handlers are removed).
@@ -376,7 +380,9 @@ class ClothApp:
             f"{self.sim.integrator.name}, dt {self.sim.dt:.3g} s ({self.sim.dt_source}){blowing}"
         )
         if self.message:
-            text += "\n" + self.message
+            # Wrapped: a refusal names a step and what to do, longer than a
+            # line; unwrapped it ran off the window's right edge.
+            text += "\n" + textwrap.fill(self.message, STATUS_COLUMNS)
         self.status.SetInput(text)
 
     def _update_handles(self):
