@@ -449,10 +449,11 @@ class Simulation:
             for f in dataclasses.fields(Scene)
             if f.name not in LIVE_KEYS and getattr(scene, f.name) != getattr(self.scene, f.name)
         ]
-        families = [name for name in ("structural", "shear", "bending")]
-        if [getattr(scene.springs, n) is None for n in families] != [
-            getattr(self.scene.springs, n) is None for n in families
-        ]:
+
+        def built(springs) -> list[bool]:  # which families exist: fixed by the build
+            return [getattr(springs, f) is not None for f in ("structural", "shear", "bending")]
+
+        if built(scene.springs) != built(self.scene.springs):
             fixed.append("springs (a family added or removed)")
         if fixed:
             raise InputError(
