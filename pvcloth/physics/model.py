@@ -35,7 +35,7 @@ class Model:
     ----------
     shape : (int, int)
         ``(ny, nx)``: rows along the height, points per row (NumPy's order;
-        :attr:`pvcloth.Simulation.shape` and the mesh give ``(nx, ny)``).
+        :attr:`pvcloth.Simulation.resolution` and the mesh give ``(nx, ny)``).
     rest_positions : ndarray, shape (N, 3)
         Initial positions in metres, in VTK point order (index ``i + nx * j``).
     mass : ndarray, shape (N,)
