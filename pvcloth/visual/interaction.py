@@ -74,8 +74,11 @@ class DragPath:
     def at(self, sim_time: float) -> np.ndarray:
         """Where the path is ``sim_time - sim0`` seconds after the grab."""
         elapsed = sim_time - self.sim0
-        points = np.array(self.points)
-        return np.array([np.interp(elapsed, self.walls, points[:, d]) for d in range(3)])
+        # The physics thread reads while the main thread adds: take the
+        # samples both lists already hold (add appends to one, then the other).
+        count = min(len(self.walls), len(self.points))
+        walls, points = self.walls[:count], np.array(self.points[:count])
+        return np.array([np.interp(elapsed, walls, points[:, d]) for d in range(3)])
 
     def target(self, pin: np.ndarray, sim_time: float, seconds: float) -> np.ndarray:
         """Where a pin now at ``pin`` should be after ``seconds`` more of
