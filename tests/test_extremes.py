@@ -79,7 +79,7 @@ def test_a_collapsed_cloth_recovers_without_nan(integrator):
     try:
         sim.advance(0.2)
     except DivergenceError as error:  # allowed: the project's clear error
-        assert "diverged at t =" in str(error)
+        assert "diverged at t =" in str(error) or "did not converge at t =" in str(error)
     else:
         assert np.isfinite(sim.positions).all()
 

@@ -135,7 +135,7 @@ class Simulation:
         self.stiffness_scale = 1.0
         _check_memory(scene)
         self.model = build_model(scene, backend)
-        self.integrator = get_integrator(scene.solver.integrator)
+        self.integrator = get_integrator(scene.solver.integrator, scene.solver.iterations)
         self.reset()
         self.dt = self._checked_step(scene.solver.dt, scene.solver.stability)
 
@@ -465,8 +465,9 @@ class Simulation:
         policy = choice("stability", policy, STABILITY_POLICIES, error=InputError)
         before = (self.scene, self.integrator, self.dt)
         self.model.apply(scene)
-        if scene.solver.integrator != self.integrator.name:
-            self.integrator = get_integrator(scene.solver.integrator)
+        solver, was = scene.solver, self.scene.solver
+        if (solver.integrator, solver.iterations) != (self.integrator.name, was.iterations):
+            self.integrator = get_integrator(solver.integrator, solver.iterations)
         # The stable step depends on the springs, air damping and the
         # integrator, not on gravity or wind: only those re-check the step.
         step_depends = ("springs", "air_damping", "solver")

@@ -212,6 +212,7 @@ STABILITY_POLICIES = ("refuse", "substep", "ignore")
 #: only, so that describing a scene needs none of the solvers; every
 #: integrator the registry holds must be one of them (``register`` checks).
 INTEGRATOR_NAMES = (
+    "backward_euler",
     "explicit_euler",
     "fast_mass_spring",
     "implicit_euler",
@@ -240,6 +241,12 @@ class SolverSpec:
         ``"refuse"`` raises a SceneError naming a stable step; ``"substep"``
         splits each step into equal substeps at most half the stable step;
         ``"ignore"`` runs as asked (the divergence guard still stops a blow-up).
+    iterations : int, optional
+        Iterations per step of the iterative implicit methods (1 to 10000):
+        ``fast_mass_spring``'s local/global iterations (default 10; more are
+        closer to backward Euler, and cost more), ``backward_euler``'s most
+        Newton iterations (default 50). The other integrators do not iterate
+        and leave it unused.
 
     Examples
     --------
@@ -253,9 +260,14 @@ class SolverSpec:
     integrator: str = "symplectic_euler"
     dt: float | None = None
     stability: str = "refuse"
+    iterations: int | None = None
 
     def __post_init__(self):
         _set(self, "stability", choice("stability", self.stability, STABILITY_POLICIES))
+        if self.iterations is not None:
+            _set(
+                self, "iterations", integer("iterations", self.iterations, minimum=1, maximum=10000)
+            )
         _set(self, "integrator", choice("integrator", self.integrator, INTEGRATOR_NAMES))
         if self.dt is not None:
             _set(self, "dt", real("dt", self.dt, minimum=0.0, exclusive=True, maximum=10.0))
@@ -643,7 +655,11 @@ class Scene:
             ),
             ("springs", "; ".join(springs) or "none"),
             ("pins", "; ".join(pins) or "none"),
-            ("solver", f"{solver.integrator}, dt {step}, stability {solver.stability}"),
+            (
+                "solver",
+                f"{solver.integrator}, dt {step}, stability {solver.stability}"
+                + (f", {solver.iterations} iterations" if solver.iterations else ""),
+            ),
             ("gravity", f"{_vec(self.gravity)} m/s^2, air damping {self.air_damping:g} 1/s"),
             ("wind", wind),
             ("obstacles", "; ".join(_obstacle_text(o) for o in self.obstacles) or "none"),

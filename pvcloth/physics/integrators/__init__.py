@@ -5,6 +5,7 @@ decorate it with :func:`register` and import the module here.
 """
 
 from pvcloth.physics.integrators import (  # noqa: F401  (importing registers them)
+    backward_euler,
     explicit_euler,
     fast_mass_spring,
     implicit_euler,
@@ -18,6 +19,9 @@ from pvcloth.scene.validation import choice
 __all__ = ["INTEGRATORS", "Integrator", "get_integrator", "register"]
 
 
-def get_integrator(name: str) -> Integrator:
-    """A new integrator instance by registry name, e.g. ``"symplectic_euler"``."""
-    return INTEGRATORS[choice("integrator", name, sorted(INTEGRATORS))]()
+def get_integrator(name: str, iterations: int | None = None) -> Integrator:
+    """A new integrator instance by registry name, e.g. ``"symplectic_euler"``;
+    ``iterations`` per step for those that iterate (``None``: their default;
+    the others do not use it)."""
+    cls = INTEGRATORS[choice("integrator", name, sorted(INTEGRATORS))]
+    return cls(iterations=iterations) if cls.iterative and iterations is not None else cls()

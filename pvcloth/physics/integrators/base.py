@@ -46,11 +46,15 @@ class Integrator(ABC):
         Registry key, as written in scene files.
     order : int
         Global order of accuracy.
+    iterative : bool
+        Whether it iterates within a step, and so takes ``iterations``
+        (``solver.iterations`` in a scene) when it is made.
     """
 
     name: str = ""
     order: int = 1
     description: str = ""
+    iterative: bool = False
     _forces: np.ndarray | None = None  # reused (N, 3) force buffer, newtons
 
     def forces(self, model: Model, state: State) -> np.ndarray:

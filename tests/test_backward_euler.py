@@ -1,0 +1,117 @@
+"""The converged backward Euler reference: it solves the implicit equation
+(checked against a root found independently), it is what Liu et al.'s
+iterations converge to, and it says when it cannot converge."""
+
+import numpy as np
+import pytest
+from scipy.optimize import fsolve
+
+import pvcloth
+from conftest import SCENES, small_scene
+from pvcloth import DivergenceError, PinSpec, Simulation, WindSpec
+
+DT = 1 / 60
+
+
+def test_one_step_is_the_root_of_the_implicit_equation():
+    """A 2x2 cloth with three corners pinned leaves one free point on three
+    damped springs. Its backward Euler step is the root of three equations,
+    written here from Hooke's law and the dashpot along the spring, and
+    found by MINPACK; the integrator must land on it."""
+    k, c = 300.0, 0.8
+    scene = small_scene(
+        2,
+        stiffness=k,
+        damping=c,
+        pins=PinSpec(corners=(), indices=(0, 1, 2)),
+        orientation="horizontal",
+    )
+    sim = Simulation(scene, integrator="backward_euler", dt=DT)
+    sim.state.v[3] = (0.3, -0.2, 0.5)
+    x0 = sim.positions.copy()
+    v0 = sim.velocities[3].copy()
+    mass = sim.model.mass[3]
+    gravity = np.array(scene.gravity)
+    # The three springs at point 3: structural to 1 and 2 (on the border,
+    # so each is half the family's: a border edge belongs to one cell, not
+    # two), shear to 0.
+    springs = [(1, k / 2, c / 2, 1.0), (2, k / 2, c / 2, 1.0), (0, k / 10, c / 10, np.sqrt(2.0))]
+
+    def equation(x):
+        v = (x - x0[3]) / DT
+        force = mass * gravity
+        for other, stiffness, damping, rest in springs:
+            d = x - x0[other]  # the pinned ends stay where they are
+            length = np.linalg.norm(d)
+            u = d / length
+            force = force - (stiffness * (length - rest) + damping * (u @ v)) * u
+        return mass * (x - x0[3] - DT * v0) - DT**2 * force
+
+    root = fsolve(equation, x0[3] + DT * v0, xtol=1e-13)
+    sim.step()
+    np.testing.assert_allclose(sim.positions[3], root, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(sim.positions[:3], x0[:3], rtol=0, atol=0)
+    np.testing.assert_allclose(sim.velocities[3], (root - x0[3]) / DT, rtol=0, atol=1e-7)
+
+
+def test_every_step_meets_the_stated_residual():
+    """Cotton hung from two corners in a gusty wind: after every frame step
+    the implicit equation holds to the stated 1e-9 m at every free point."""
+    scene = pvcloth.load_scene(SCENES / "cotton.toml").with_resolution(10)
+    scene = scene.replace(wind=WindSpec(velocity=(0.0, 3.0, 0.0), gust=0.5, lift=0.3))
+    sim = Simulation(scene, integrator="backward_euler")
+    assert sim.dt == DT
+    free = ~sim.control.pinned
+    for _ in range(6):
+        x, v = sim.positions.copy(), sim.velocities.copy()
+        sim.step()
+        x_new = sim.positions
+        force = sim.model.compute_forces(x_new, (x_new - x) / DT)
+        residual = x_new - x - DT * v - DT**2 * force / sim.model.mass[:, None]
+        assert np.abs(residual[free]).max() <= 1e-9
+        assert 1 <= sim.integrator.last_iterations <= 50
+
+
+def test_liu_iterations_converge_to_it():
+    """Without dashpots or air damping (which Liu et al.'s method leaves out
+    or takes explicitly), its local/global iterations, run long, reach the
+    same backward Euler step by another road."""
+    scene = small_scene(8, stiffness=500.0, dt=DT, orientation="horizontal")
+    scene = scene.with_overrides({"pins.corners": ["top-left", "top-right"]})
+    newton = Simulation(scene, integrator="backward_euler")
+    liu = Simulation(
+        scene.with_overrides({"solver.iterations": 4000}), integrator="fast_mass_spring"
+    )
+    assert liu.integrator.iterations == 4000
+    for _ in range(4):
+        newton.step()
+        liu.step()
+    moved = np.abs(newton.positions - small_start(scene)).max()
+    assert moved > 0.01  # the cloth falls: the comparison is not of a resting cloth
+    np.testing.assert_allclose(liu.positions, newton.positions, rtol=0, atol=1e-7)
+
+
+def small_start(scene) -> np.ndarray:
+    return Simulation(scene, integrator="symplectic_euler", dt=1e-3).positions
+
+
+def test_a_step_that_cannot_converge_says_so():
+    scene = small_scene(6, stiffness=2000.0, damping=1.0, dt=DT, orientation="horizontal")
+    scene = scene.with_overrides(
+        {"solver.iterations": 1, "pins.corners": ["top-left", "top-right"]}
+    )
+    sim = Simulation(scene, integrator="backward_euler")
+    with pytest.raises(DivergenceError, match=r"did not converge at t = 0 s.*1 iterations"):
+        sim.advance(0.5)
+    assert np.isfinite(sim.positions).all()
+
+
+def test_iterations_are_a_scene_key_and_a_live_edit():
+    scene = small_scene(6, dt=DT, integrator="fast_mass_spring")
+    sim = Simulation(scene.with_overrides({"solver.iterations": 3}))
+    assert sim.integrator.iterations == 3
+    assert "3 iterations" in dict(sim.scene.summary())["solver"]
+    sim.update({"solver.iterations": 25})
+    assert sim.integrator.iterations == 25
+    with pytest.raises(pvcloth.SceneError, match="solver.iterations"):
+        scene.with_overrides({"solver.iterations": 0})
