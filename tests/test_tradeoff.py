@@ -12,7 +12,7 @@ import pytest
 from conftest import SCENES, small_scene
 from pvcloth import INTEGRATORS, Simulation
 from pvcloth.cli import main
-from pvcloth.studies.tradeoff import measure, pareto_front
+from pvcloth.studies.tradeoff import measure, pareto_front, table
 
 
 @pytest.fixture(scope="module")
@@ -76,3 +76,36 @@ def test_command_writes_csv_plot_and_table(tmp_path, capsys):
     assert {r["integrator"] for r in rows} == {"symplectic_euler", "implicit_euler"}
     assert iio.imread(tmp_path / "tradeoff.png").ndim == 3
     assert "Pareto front" in capsys.readouterr().out
+
+
+def test_implicit_errors_split_into_time_and_solver_parts():
+    """The implicit methods' error is split against converged backward Euler
+    at the same step: RMS distances obey the triangle inequality, and more
+    local/global iterations shrink only the solver part."""
+    scene = small_scene(6, stiffness=800.0, damping=0.5, orientation="horizontal")
+    scene = scene.with_overrides({"pins.corners": ["top-left", "top-right"]})
+
+    def split(iterations):
+        runs = measure(
+            scene.with_overrides({"solver.iterations": iterations}),
+            integrators=["fast_mass_spring", "implicit_euler", "rk4"],
+            steps=[1 / 60, 1 / 240],
+            duration=0.25,
+            progress=False,
+        )
+        return {(r.integrator, round(r.dt, 6)): r for r in runs}
+
+    few, many = split(3), split(300)
+    assert ("backward_euler", round(1 / 60, 6)) not in few  # measured, not listed
+    for (name, dt), run in few.items():
+        if name == "rk4":
+            assert np.isnan(run.solver_error) and np.isnan(run.discretisation_error)
+            continue
+        time, solver = run.discretisation_error, run.solver_error
+        assert time > 0 and solver > 0
+        assert abs(run.rms_error - time) <= solver * (1 + 1e-9)
+        assert solver <= (run.rms_error + time) * (1 + 1e-9)
+        assert many[name, dt].discretisation_error == pytest.approx(time, rel=1e-9)
+    for dt in (round(1 / 60, 6), round(1 / 240, 6)):
+        assert many["fast_mass_spring", dt].solver_error < few["fast_mass_spring", dt].solver_error
+    assert "of which: time (m)" in table(list(few.values()))

@@ -49,12 +49,17 @@ class Integrator(ABC):
     iterative : bool
         Whether it iterates within a step, and so takes ``iterations``
         (``solver.iterations`` in a scene) when it is made.
+    converges_to : str or None
+        The integrator this one approximates and whose answer it would give
+        solved exactly (``"backward_euler"`` for the implicit ones), which
+        studies measure its solver error against; ``None`` if exact.
     """
 
     name: str = ""
     order: int = 1
     description: str = ""
     iterative: bool = False
+    converges_to: str | None = None
     _forces: np.ndarray | None = None  # reused (N, 3) force buffer, newtons
 
     def forces(self, model: Model, state: State) -> np.ndarray:

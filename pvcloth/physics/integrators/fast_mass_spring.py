@@ -47,6 +47,7 @@ class FastMassSpring(Integrator):
 
     name, order = "fast_mass_spring", 1  # registry key; global order of accuracy
     description = "Liu et al. 2013 local/global backward Euler, prefactorised; damps"
+    converges_to = "backward_euler"
     iterative = True
 
     def __init__(self, iterations: int = 10):
