@@ -49,14 +49,15 @@ def test_one_step_is_the_root_of_the_implicit_equation():
 
     root = fsolve(equation, x0[3] + DT * v0, xtol=1e-13)
     sim.step()
-    np.testing.assert_allclose(sim.positions[3], root, rtol=0, atol=1e-9)
+    assert sim.integrator.tolerance == 1e-7  # m: the residual every step reaches
+    np.testing.assert_allclose(sim.positions[3], root, rtol=0, atol=1e-7)
     np.testing.assert_allclose(sim.positions[:3], x0[:3], rtol=0, atol=0)
-    np.testing.assert_allclose(sim.velocities[3], (root - x0[3]) / DT, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(sim.velocities[3], (root - x0[3]) / DT, rtol=0, atol=1e-5)
 
 
 def test_every_step_meets_the_stated_residual():
     """Cotton hung from two corners in a gusty wind: after every frame step
-    the implicit equation holds to the stated 1e-9 m at every free point."""
+    the implicit equation holds to the stated 1e-7 m at every free point."""
     scene = pvcloth.load_scene(SCENES / "cotton.toml").with_resolution(10)
     scene = scene.replace(wind=WindSpec(velocity=(0.0, 3.0, 0.0), gust=0.5, lift=0.3))
     sim = Simulation(scene, integrator="backward_euler")
@@ -68,7 +69,7 @@ def test_every_step_meets_the_stated_residual():
         x_new = sim.positions
         force = sim.model.compute_forces(x_new, (x_new - x) / DT)
         residual = x_new - x - DT * v - DT**2 * force / sim.model.mass[:, None]
-        assert np.abs(residual[free]).max() <= 1e-9
+        assert np.abs(residual[free]).max() <= 1e-7
         assert 1 <= sim.integrator.last_iterations <= 50
 
 
@@ -115,3 +116,30 @@ def test_iterations_are_a_scene_key_and_a_live_edit():
     assert sim.integrator.iterations == 25
     with pytest.raises(pvcloth.SceneError, match="solver.iterations"):
         scene.with_overrides({"solver.iterations": 0})
+
+
+def test_the_exact_spring_jacobian_is_the_derivative_of_the_forces():
+    """Central differences of the forces, in x and in v, agree with the
+    exact Jacobian to second order: halving the step quarters the error."""
+    scene = pvcloth.load_scene(SCENES / "cotton.toml").with_resolution(8)
+    sim = Simulation(scene)
+    sim.advance(3 / 60)  # moving, with springs both stretched and compressed
+    x, v = sim.positions, sim.velocities
+    dfdx, dfdv = sim.model.jacobians(x, v, exact=True)
+    direction = np.random.default_rng(7).standard_normal(x.shape)
+
+    def misfit(h):
+        plus = sim.model.compute_forces(x + h * direction, v)
+        minus = sim.model.compute_forces(x - h * direction, v)
+        change = ((plus - minus) / 2).ravel()
+        return np.abs(change - dfdx @ (h * direction).ravel()).max() / np.abs(change).max()
+
+    assert misfit(1e-5) < 1e-6
+    assert misfit(1e-5) / misfit(2e-5) == pytest.approx(0.25, abs=0.05)
+    plus = sim.model.compute_forces(x, v + 1e-6 * direction)
+    minus = sim.model.compute_forces(x, v - 1e-6 * direction)
+    np.testing.assert_allclose(
+        ((plus - minus) / 2).ravel(), dfdv @ (1e-6 * direction).ravel(), rtol=0, atol=1e-15
+    )
+    clamped, _ = sim.model.jacobians(x, v)
+    assert abs(clamped - dfdx).max() > 0  # the default is the clamped one

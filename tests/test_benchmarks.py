@@ -43,6 +43,7 @@ RUNS = {
         "interactive_fps.md",
     ),
     "memory.py": ([], "memory.md"),
+    "newton_peer.py": ([], "newton_peer.md"),
     "render_cost.py": (["--frames", "2", "--sizes", "8"], "render_cost.md"),
     "startup.py": ([], "startup.md"),
     "step_allocations.py": ([], "step_allocations.md"),
