@@ -70,7 +70,7 @@ def test_every_step_meets_the_stated_residual():
         force = sim.model.compute_forces(x_new, (x_new - x) / DT)
         residual = x_new - x - DT * v - DT**2 * force / sim.model.mass[:, None]
         assert np.abs(residual[free]).max() <= 1e-7
-        assert 1 <= sim.integrator.last_iterations <= 50
+        assert 1 <= sim.integrator.last_iterations <= 100
 
 
 def test_liu_iterations_converge_to_it():

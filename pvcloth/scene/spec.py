@@ -245,7 +245,7 @@ class SolverSpec:
         Iterations per step of the iterative implicit methods (1 to 10000):
         ``fast_mass_spring``'s local/global iterations (default 10; more are
         closer to backward Euler, and cost more), ``backward_euler``'s most
-        Newton iterations (default 50). The other integrators do not iterate
+        Newton iterations (default 100). The other integrators do not iterate
         and leave it unused.
 
     Examples
@@ -255,6 +255,8 @@ class SolverSpec:
     True
     >>> SolverSpec("rk4", dt=1e-4).dt
     0.0001
+    >>> SolverSpec("fast_mass_spring", iterations=6).iterations
+    6
     """
 
     integrator: str = "symplectic_euler"

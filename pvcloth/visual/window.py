@@ -455,9 +455,11 @@ class ClothApp:
 
     def cycle_integrator(self):
         """The next integrator, at its own automatic step (1/60 s for the
-        implicit ones, half the stable step for explicit ones)."""
-        names = sorted(INTEGRATORS)
-        following = names[(names.index(self.sim.integrator.name) + 1) % len(names)]
+        implicit ones, half the stable step for explicit ones); the
+        measuring-only ones (``backward_euler``) are left out."""
+        names = sorted(name for name, cls in INTEGRATORS.items() if cls.interactive)
+        current = self.sim.integrator.name
+        following = names[(names.index(current) + 1) % len(names)] if current in names else names[0]
 
         def switch():
             self.sim.update({"solver.integrator": following, "solver.dt": None})

@@ -27,14 +27,15 @@ class BackwardEuler(Integrator):
     of the step. Each Newton iteration solves ``(M - h^2 K - h C) dx = -M r``
     with the force Jacobians ``K = dF/dx`` and ``C = dF/dv`` at the current
     iterate, and a backtracking line search halves the step until ``|r|``
-    falls. The Jacobian is the exact one (compressed springs' negative
-    transverse stiffness and the dashpots' turning with their spring
-    included), so convergence is quadratic near the solution; the matrix
-    may then be indefinite, and a sparse LU (SuperLU) solves it. Should that
-    direction not lower the residual, the step goes on with the clamped,
-    positive definite Jacobian :class:`~pvcloth.physics.integrators.implicit_euler.ImplicitEuler`
-    uses (sparse Cholesky, cholespy), along which ``|r|`` always falls at
-    first.
+    falls. Far from the solution (residual above :attr:`exact_below`) the
+    Jacobian is the clamped, positive definite one
+    :class:`~pvcloth.physics.integrators.implicit_euler.ImplicitEuler` uses
+    (sparse Cholesky, cholespy): where springs buckle the exact one is
+    indefinite and its steps were measured to wander between solutions.
+    Close to it the exact Jacobian (compressed springs' negative transverse
+    stiffness and the dashpots' turning with their spring included; sparse
+    LU, SuperLU) converges quadratically; should its direction not lower
+    the residual, the step goes back to the clamped one.
 
     A step has converged when the largest residual over the points is at
     most :attr:`tolerance` (``1e-7`` m): ``x'`` is then backward Euler's
@@ -62,10 +63,13 @@ class BackwardEuler(Integrator):
     name, order = "backward_euler", 1  # registry key; global order of accuracy
     description = "backward Euler, Newton to a 1e-7 m residual; the implicit methods' reference"
     iterative = True
+    interactive = False  # seconds per step at 64x64: not offered by the window's key
     #: Largest residual (m) over the points at which a step has converged.
     tolerance = 1e-7
+    #: Residual (m) below which Newton takes the exact Jacobian.
+    exact_below = 1e-4
 
-    def __init__(self, iterations: int = 50):
+    def __init__(self, iterations: int = 100):
         self.iterations = iterations
         #: Newton iterations the last step took, and factorisations.
         self.last_iterations = self.last_factorisations = 0
@@ -86,16 +90,23 @@ class BackwardEuler(Integrator):
         guess = x + dt * v
         residual = self._residual(model, x, v, guess, dt, control)
         size = np.abs(residual).max()
-        solve, exact, factorisations, previous_size = None, True, 0, np.inf
+        solve, exact, fresh, banned = None, False, False, False
+        factorisations, previous_size = 0, np.inf
         for count in range(self.iterations + 1):
             if size <= self.tolerance:
                 self.last_iterations, self.last_factorisations = count, factorisations
                 return State(guess, (guess - x) / dt, state.t + dt)
             if count == self.iterations:
                 break
-            if solve is None or size > 0.5 * previous_size:
+            # Far from the solution the clamped, positive definite Jacobian
+            # (the exact one is indefinite where springs buckle, and its
+            # Newton steps wander between solutions); close to it the exact
+            # one, for quadratic convergence.
+            want_exact = size < self.exact_below and not banned
+            if solve is None or want_exact != exact or size > 0.5 * previous_size:
+                exact = want_exact
                 solve = self._factorise(model, guess, (guess - x) / dt, dt, mass, free, exact)
-                factorisations += 1
+                factorisations, fresh = factorisations + 1, True
             previous_size = size
             correction = np.zeros_like(x)
             correction[moves] = solve(-(model.mass[:, None] * residual)[moves].ravel()).reshape(
@@ -104,26 +115,23 @@ class BackwardEuler(Integrator):
             # Backtracking on |r|_2: the full step first, halved until the
             # residual falls (1e-4 of the predicted fall, as Armijo asks).
             norm = np.linalg.norm(residual)
-            alpha = 1.0
-            while True:
+            alpha, trial_norm = 1.0, np.nan
+            while alpha >= 1 / 64:
                 trial = guess + alpha * correction
                 trial_residual = self._residual(model, x, v, trial, dt, control)
-                trial_norm = np.linalg.norm(trial_residual)
-                if trial_norm <= (1.0 - 1e-4 * alpha) * norm:
-                    break
-                if alpha < 1 / 64:
-                    trial_norm = np.nan
+                if np.linalg.norm(trial_residual) <= (1.0 - 1e-4 * alpha) * norm:
+                    trial_norm = np.linalg.norm(trial_residual)
                     break
                 alpha /= 2
             if not np.isfinite(trial_norm):
-                # No descent along this direction: the exact matrix was
-                # singular or the start far off. Go on with the clamped,
-                # positive definite one, which always points downhill.
-                if not exact:
+                # No descent: a factor kept from an earlier iterate is
+                # redone here; a fresh exact one gives way to the clamped.
+                if fresh and not exact:
                     break
-                solve, exact = None, False
+                banned = banned or (fresh and exact)
+                solve = None
                 continue
-            guess, residual = trial, trial_residual
+            guess, residual, fresh = trial, trial_residual, False
             size = np.abs(residual).max()
         raise DivergenceError(
             f"backward Euler did not converge at t = {state.t:.6g} s: Newton's method left "

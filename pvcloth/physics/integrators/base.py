@@ -49,6 +49,9 @@ class Integrator(ABC):
     iterative : bool
         Whether it iterates within a step, and so takes ``iterations``
         (``solver.iterations`` in a scene) when it is made.
+    interactive : bool
+        Whether the window offers it when cycling integrators (a method
+        that takes seconds per step is a measuring instrument, not one).
     converges_to : str or None
         The integrator this one approximates and whose answer it would give
         solved exactly (``"backward_euler"`` for the implicit ones), which
@@ -60,6 +63,7 @@ class Integrator(ABC):
     description: str = ""
     iterative: bool = False
     converges_to: str | None = None
+    interactive: bool = True
     _forces: np.ndarray | None = None  # reused (N, 3) force buffer, newtons
 
     def forces(self, model: Model, state: State) -> np.ndarray:
