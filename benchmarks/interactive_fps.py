@@ -10,9 +10,14 @@ step, or 1/60 s for implicit ones), lets it run, and measures:
 - the real-time fraction: simulated seconds over wall seconds;
 - the longest physics chunk (work that runs beside the drawing).
 
+With ``--drag`` a point in the lower half of the cloth is grabbed once the
+warm-up is over and carried round a circle of 80 pixels' radius every 2 s
+(mouse events into the window's interactor, as the mouse gives them) for
+the whole measurement, then let go.
+
 Run:  xvfb-run -a -s "-screen 0 1280x1024x24" python benchmarks/interactive_fps.py
       [--scene data/scenes/hanging.toml] [--sizes 32 64] [--seconds 6]
-      [--integrators ...] [--out FILE]
+      [--integrators ...] [--drag] [--out FILE]
       (writes benchmarks/results/interactive_fps.md)
 """
 
@@ -26,19 +31,27 @@ from pathlib import Path
 import numpy as np
 
 import pvcloth
+from pvcloth.visual.interaction import world_to_display
 from pvcloth.visual.window import ClothApp
 
 HERE = Path(__file__).parent
 WARM_UP = 1.0  # wall seconds before measuring (compilation, first chunks)
 
 
-def measure(scene, integrator: str, seconds: float) -> dict:
+DRAG_RADIUS, DRAG_PERIOD = 80.0, 2.0  # pixels, wall seconds per turn
+
+
+def measure(scene, integrator: str, seconds: float, drag: bool = False) -> dict:
     sim = pvcloth.Simulation(scene, integrator=integrator, stability="substep")
     sim.set_step(None)  # what the window's "a" and "i" keys give
     app = ClothApp(sim, window_size=(1024, 768))
     frames, chunks = [], []
     start = {}
     original = app.frame
+
+    iren = app.plotter.iren
+    nx, ny = sim.resolution
+    held = {}
 
     def frame(*args):
         original(*args)
@@ -47,7 +60,21 @@ def measure(scene, integrator: str, seconds: float) -> dict:
         chunks.append(app.physics.chunk_ms)
         if "wall" not in start and now - frames[0] >= WARM_UP:
             start.update(wall=now, sim=sim.time, frame=len(frames) - 1)
+            if drag:  # press on a free point a third of the way up
+                k = nx // 2 + nx * (ny // 3)
+                x, y, _ = world_to_display(app.plotter.renderer, sim.positions[k : k + 1])[0]
+                held.update(x=x, y=y)
+                iren._mouse_left_button_press(int(round(x)), int(round(y)))
+                held["grabbed"] = app.style.grabbed is not None
+        elif held:
+            angle = 2 * np.pi * (now - start["wall"]) / DRAG_PERIOD
+            iren._mouse_move(
+                int(round(held["x"] + DRAG_RADIUS * np.sin(angle))),
+                int(round(held["y"] + DRAG_RADIUS * (1 - np.cos(angle)))),
+            )
         if "wall" in start and now - start["wall"] >= seconds:
+            if held:
+                iren._mouse_left_button_release(int(round(held["x"])), int(round(held["y"])))
             app.quit()
 
     app.frame = frame
@@ -63,6 +90,7 @@ def measure(scene, integrator: str, seconds: float) -> dict:
         "worst_ms": 1e3 * float(intervals.max()),
         "real_time": (sim.time - start["sim"]) / wall,
         "chunk_ms": max(chunks[start["frame"] :]),
+        "dragged": bool(held.get("grabbed")),
     }
 
 
@@ -73,14 +101,19 @@ def main() -> None:
     )
     parser.add_argument("--sizes", type=int, nargs="+", default=[32, 64])
     parser.add_argument("--seconds", type=float, default=6.0)
-    parser.add_argument("--integrators", nargs="+", default=sorted(pvcloth.INTEGRATORS))
+    parser.add_argument(
+        "--integrators",
+        nargs="+",
+        default=sorted(n for n, cls in pvcloth.INTEGRATORS.items() if cls.interactive),
+    )
+    parser.add_argument("--drag", action="store_true", help="drag a point all the while")
     parser.add_argument("--out", type=Path, default=HERE / "results" / "interactive_fps.md")
     args = parser.parse_args()
     base = pvcloth.load_scene(args.scene)
     rows = []
     for n in args.sizes:
         for integrator in args.integrators:
-            rows.append(measure(base.with_resolution(n), integrator, args.seconds))
+            rows.append(measure(base.with_resolution(n), integrator, args.seconds, args.drag))
             print(rows[-1], flush=True)
     lines = [
         "# The interactive window, by the wall clock",
@@ -93,16 +126,22 @@ def main() -> None:
         "seconds; the worst interval is the longest wait between two frames; real time "
         "is simulated over wall seconds (1 = real time; below it the window runs in slow "
         "motion and says so). Physics runs on its own thread: a long chunk slows the "
-        "cloth, not the drawing.",
+        "cloth, not the drawing."
+        + (
+            f" Dragging: a point grabbed and carried round a {DRAG_RADIUS:g} px circle every "
+            f"{DRAG_PERIOD:g} s throughout ('dragged' says the press grabbed it)."
+            if args.drag
+            else ""
+        ),
         "",
         "| cloth | integrator | dt (s) | fps | median frame (ms) | worst frame (ms) "
-        "| real time | longest physics chunk (ms) |",
-        "|---|---|---|---|---|---|---|---|",
+        "| real time | longest physics chunk (ms) |" + (" dragged |" if args.drag else ""),
+        "|---|---|---|---|---|---|---|---|" + ("---|" if args.drag else ""),
     ]
     lines += [
         f"| {r['n']}x{r['n']} | {r['integrator']} | {r['dt']:.3g} | {r['fps']:.1f} "
         f"| {r['median_ms']:.1f} | {r['worst_ms']:.1f} | {r['real_time']:.2f} "
-        f"| {r['chunk_ms']:.0f} |"
+        f"| {r['chunk_ms']:.0f} |" + (f" {'yes' if r['dragged'] else 'NO'} |" if args.drag else "")
         for r in rows
     ]
     args.out.write_text("\n".join(lines) + "\n")

@@ -105,6 +105,8 @@ def cmd_render(args) -> None:
         f"per frame: physics {ms['physics']:.1f}, drawing {ms['drawing']:.1f}, "
         f"encoding {ms['encoding']:.1f}"
     )
+    for note in stats.notes:
+        print(f"note: {note}")
 
 
 def cmd_run(args) -> None:

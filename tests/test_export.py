@@ -46,7 +46,7 @@ def test_pvd_series_reads_back_in_pyvista_and_meshio(tmp_path):
         reader.set_active_time_point(n)
         mesh = reader.read()[0]
         np.testing.assert_allclose(mesh.points, x, atol=1e-12)
-        vtu = meshio.read(tmp_path / "cloth_frames" / f"cloth_{n:05d}.vtu")
+        vtu = meshio.read(tmp_path / "cloth_vtu" / f"cloth_{n:05d}.vtu")
         np.testing.assert_allclose(vtu.points, x, atol=1e-12)
     assert np.abs(expected[-1][1] - expected[0][1]).max() > 1e-3  # the points moved
 
@@ -75,9 +75,52 @@ def test_obj_sequence_for_blender(tmp_path):
 
     folder = export(cloth(), tmp_path / "cloth.obj", frames=3, fps=20, progress=False)
     files = sorted(folder.glob("*.obj"))
-    assert len(files) == 3
+    assert folder.name == "cloth_obj" and len(files) == 3
     expected = recorded(3)
-    np.testing.assert_allclose(meshio.read(files[-1]).points, expected[-1][1], atol=1e-6)
+    mesh = meshio.read(files[-1])
+    np.testing.assert_allclose(mesh.points, expected[-1][1], rtol=0, atol=1e-15)
+    # Texture coordinates: the grid's, 0 to 1; normals: unit, and across
+    # the cloth (the cloth starts vertical in the xz plane: normals along y).
+    uv = mesh.point_data["obj:vt"]
+    assert uv.min() == 0.0 and uv.max() == 1.0 and uv.shape == (36, 2)
+    first = meshio.read(files[0]).point_data["obj:vn"]
+    np.testing.assert_allclose(np.linalg.norm(first, axis=1), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(np.abs(first[:, 1]), 1.0, rtol=1e-12)
+    # Every face names the same index for vertex, texture and normal.
+    faces = [line.split()[1:] for line in files[0].read_text().splitlines() if line[:2] == "f "]
+    assert len(faces) == 25 and all(len({*c.split("/")}) == 1 for f in faces for c in f)
+    # Reruns are byte for byte the same (no timestamp).
+    again = export(cloth(), tmp_path / "again.obj", frames=3, fps=20, progress=False)
+    assert (again / "again_00002.obj").read_bytes() == files[-1].read_bytes()
+
+
+def test_files_get_the_umask_mode_and_formats_keep_their_own_folders(tmp_path):
+    import os
+
+    old = os.umask(0o022)
+    try:
+        pvd = export(cloth(), tmp_path / "cloth.pvd", frames=2, progress=False)
+        obj = export(cloth(), tmp_path / "cloth.obj", frames=2, progress=False)
+        export(cloth(), tmp_path / "cloth.xdmf", frames=2, progress=False)
+        pvcloth.save_checkpoint(cloth(), tmp_path / "run.npz")
+    finally:
+        os.umask(old)
+    assert pvd.with_name("cloth_vtu").is_dir() and obj.name == "cloth_obj"
+    for file in tmp_path.rglob("*"):
+        if file.is_file():
+            assert file.stat().st_mode & 0o777 == 0o644, file
+
+
+def test_no_export_changes_the_working_directory(tmp_path, monkeypatch):
+    import os
+
+    def refuse(_):
+        raise AssertionError("os.chdir called: unsafe under threads")
+
+    monkeypatch.setattr(os, "chdir", refuse)
+    for suffix in (".xdmf", ".pvd", ".obj"):
+        export(cloth(), tmp_path / f"cloth{suffix}", frames=2, progress=False)
+    assert (tmp_path / "cloth.h5").is_file() and (tmp_path / "cloth.xdmf").is_file()
 
 
 def test_interrupted_export_leaves_a_readable_series(tmp_path):

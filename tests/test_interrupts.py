@@ -45,7 +45,7 @@ def frames_in(output: Path) -> int:
             for k in range(reader.num_steps):
                 reader.read_data(k)
             return reader.num_steps
-    folder = output.with_name(f"{output.stem}_frames")
+    folder = output.with_name(f"{output.stem}_obj")
     if output.suffix == ".pvd":
         import pyvista as pv
 

@@ -167,3 +167,88 @@ def test_environment_scenes_render_with_their_obstacles(name, tmp_path):
     assert (solid > 0.01) == bool(kinds & {"sphere", "box"})
     assert (floor > 0.05) == ("ground" in kinds)
     assert cloth_pixels(frames[-1]).mean() > 0.005
+
+
+def gif_delays_in_file(path) -> list[int]:
+    """Every frame's delay in centiseconds, read from the GIF's bytes: the
+    Graphic Control Extension blocks (0x21 0xF9 0x04, flags, delay as a
+    little-endian 16-bit number), found by walking the file's blocks."""
+    data = path.read_bytes()
+    assert data[:6] in (b"GIF87a", b"GIF89a")
+    flags = data[10]
+    at = 13 + (3 * 2 ** ((flags & 7) + 1) if flags & 0x80 else 0)  # global colour table
+    delays = []
+    while data[at] != 0x3B:  # trailer
+        if data[at] == 0x21:  # extension: label, then sub-blocks
+            if data[at + 1] == 0xF9:
+                delays.append(int.from_bytes(data[at + 4 : at + 6], "little"))
+            at += 2
+            while data[at]:
+                at += data[at] + 1
+            at += 1
+        else:  # image descriptor, optional local colour table, LZW sub-blocks
+            local = data[at + 9]
+            at += 10 + (3 * 2 ** ((local & 7) + 1) if local & 0x80 else 0) + 1
+            while data[at]:
+                at += data[at] + 1
+            at += 1
+    return delays
+
+
+def test_gif_frame_delays_add_up_to_the_movie_length(tmp_path):
+    from pvcloth.visual.movie import render
+
+    sim = Simulation.from_file(SCENES / "hanging.toml")
+    out = tmp_path / "timed.gif"
+    render(sim, out, frames=9, fps=30, size=(120, 90), progress=False)
+    delays = gif_delays_in_file(out)
+    assert len(delays) == 9 and set(delays) == {3, 4}  # a constant 3 cs would be 11 % fast
+    assert sum(delays) == 30  # 9 frames at 30 fps: 0.3 s
+    assert len(iio.imread(out)) == 9
+
+
+def test_gif_refuses_a_frame_rate_it_cannot_show(tmp_path):
+    from pvcloth import InputError
+    from pvcloth.visual.movie import render
+
+    with pytest.raises(InputError, match=r"fps.*at most 50"):
+        render(Simulation(small_scene(4)), tmp_path / "fast.gif", frames=3, fps=60, progress=False)
+    assert list(tmp_path.iterdir()) == []
+
+
+def mp4_boxes(path) -> list[str]:
+    """The top-level box types of an MP4, in file order."""
+    data, at, boxes = path.read_bytes(), 0, []
+    while at < len(data):
+        size = int.from_bytes(data[at : at + 4], "big")
+        boxes.append(data[at + 4 : at + 8].decode("latin-1"))
+        if size == 1:  # 64-bit size follows
+            size = int.from_bytes(data[at + 8 : at + 16], "big")
+        at += size
+    return boxes
+
+
+def test_mp4_of_an_odd_size_is_padded_not_stretched_and_starts_fast(tmp_path):
+    import subprocess
+
+    import imageio_ffmpeg
+
+    from pvcloth.visual.movie import render
+
+    sim = Simulation(small_scene(8, damping=0.1, dt=5e-4))
+    out = tmp_path / "odd.mp4"
+    stats = render(sim, out, frames=3, fps=20, size=(161, 121), progress=False)
+    assert stats.notes == ["MP4 frames padded from 161x121 to 162x122 (H.264 needs even sides)"]
+    probe = subprocess.run(
+        [imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-i", str(out)],
+        capture_output=True,
+        text=True,
+    ).stderr
+    assert "162x122" in probe and "h264" in probe
+    boxes = mp4_boxes(out)
+    assert boxes.index("moov") < boxes.index("mdat")  # fast start: index first
+    # Padded with the edge pixels: the added column repeats the last one
+    # (a stretch would have resampled every column).
+    frame = iio.imread(out)[0].astype(int)
+    assert frame.shape == (122, 162, 3)
+    assert np.abs(frame[:, -1] - frame[:, -2]).mean() < 3

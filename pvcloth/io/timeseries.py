@@ -3,7 +3,7 @@
 Formats, by extension:
 
 ``.pvd``
-    one VTU file per frame in ``OUT_frames/`` plus a ParaView Data index with
+    one VTU file per frame in ``OUT_vtu/`` plus a ParaView Data index with
     each frame's simulated time; ParaView plays it as a moving cloth.
 ``.xdmf``
     an XDMF time series (with its HDF5 file). meshio writes the geometry
@@ -11,19 +11,24 @@ Formats, by extension:
     ``velocity`` as point data: in ParaView apply *Warp By Vector* with
     ``displacement`` to see the cloth move.
 ``.obj``
-    one OBJ file per frame in ``OUT_frames/`` for Blender (import as a mesh
-    sequence, e.g. with the Stop-motion-OBJ add-on).
+    one OBJ file per frame in ``OUT_obj/`` for Blender, with texture
+    coordinates (the grid's, 0 to 1) and vertex normals, the same vertex
+    order in every frame, and nothing that changes from run to run (meshio's
+    writer stamps the time and cannot give faces texture coordinates, so
+    pvcloth writes these itself). The data is z-up in metres: in Blender's
+    OBJ importer set *Forward* to Y and *Up* to Z. Blender has no built-in
+    sequence importer; an add-on (e.g. Stop-motion-OBJ) plays the folder.
 
 Every format is written into a hidden staging folder beside the output and
 moved into place when the writing stops, finished or interrupted (Ctrl-C,
 SIGTERM, an error): the frames done then form a readable series, and a run
 killed outright (SIGKILL) leaves an earlier export at that path as it was.
-A re-export replaces the whole ``OUT_frames/`` folder, old frames and all.
+A re-export replaces the whole frames folder, old frames and all; each
+format has a folder of its own. Nothing here changes the working directory.
 """
 
 from __future__ import annotations
 
-import contextlib
 import os
 import shutil
 from pathlib import Path
@@ -52,6 +57,42 @@ def quads(resolution: tuple[int, int]) -> np.ndarray:
     return np.stack(
         [index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]], axis=-1
     ).reshape(-1, 4)
+
+
+def grid_texture_coordinates(resolution: tuple[int, int]) -> np.ndarray:
+    """``(N, 2)`` texture coordinates of a grid's points, 0 to 1 along each
+    side, in point order."""
+    nx, ny = resolution
+    u, v = np.meshgrid(np.linspace(0.0, 1.0, nx), np.linspace(0.0, 1.0, ny))
+    return np.column_stack([u.ravel(), v.ravel()])
+
+
+def vertex_normals(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Unit normals ``(N, 3)`` at the points of quads ``faces`` ``(M, 4)``:
+    the sum of the normals of the faces around each point (each the cross
+    product of its diagonals, so weighted by area)."""
+    diagonals = np.cross(
+        points[faces[:, 2]] - points[faces[:, 0]], points[faces[:, 3]] - points[faces[:, 1]]
+    )
+    normals = np.zeros_like(points)
+    for corner in range(4):
+        np.add.at(normals, faces[:, corner], diagonals)
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    return normals / np.where(length > 0, length, 1.0)
+
+
+def write_obj(path: Path, points: np.ndarray, faces: np.ndarray, texture: np.ndarray) -> None:
+    """One Wavefront OBJ: vertices (m), texture coordinates, vertex normals
+    and quads indexing all three alike; the same bytes for the same cloth."""
+    normals = vertex_normals(points, faces)
+    index = faces + 1
+    corners = np.repeat(index, 3, axis=1).reshape(-1, 4, 3)
+    with open(path, "w") as out:
+        out.write("# pvcloth cloth frame: metres, z up\n")
+        np.savetxt(out, points, fmt="v %.17g %.17g %.17g")
+        np.savetxt(out, texture, fmt="vt %.17g %.17g")
+        np.savetxt(out, normals, fmt="vn %.17g %.17g %.17g")
+        np.savetxt(out, corners.reshape(len(faces), 12), fmt="f" + " %d/%d/%d" * 4)
 
 
 def _pvd_index(entries: list[tuple[float, str]]) -> str:
@@ -127,43 +168,51 @@ def export(
     remove_orphaned_temporaries(path)
     staging = path.with_name(f".{path.stem}.{os.getpid()}.staging{path.suffix}")
     staging.mkdir()
-    folder = f"{path.stem}_frames"
+    folder = f"{path.stem}_{'vtu' if suffix == '.pvd' else 'obj'}"
     entries: list[tuple[float, str]] = []  # PVD index: (time, frame file)
     try:
         if suffix == ".xdmf":
             # meshio writes the .h5 as it goes and the .xdmf when closed.
-            # meshio 5.3 writes the HDF5 file into the working directory but
-            # its XDMF points beside itself: write from the staging folder.
-            with contextlib.chdir(staging):
-                writer = meshio.xdmf.TimeSeriesWriter(path.name).__enter__()
-                try:
-                    writer.write_points_cells(rest, cells)
-                    for _ in bar:
-                        with deferred():  # a frame is written whole
-                            writer.write_data(
-                                sim.time,
-                                point_data={
-                                    "displacement": sim.positions - rest,
-                                    "velocity": np.array(sim.velocities),
-                                },
-                            )
-                            done += 1
-                finally:
-                    with deferred(then_raise=False):  # closing writes the .xdmf itself
-                        writer.__exit__(None, None, None)
+            # meshio 5.3's __enter__ opens the HDF5 file in the working
+            # directory (its name without the folder); opening it here by its
+            # full path instead, as __enter__ would, keeps the working
+            # directory alone (a chdir is process-wide: unsafe under threads).
+            import h5py
+
+            writer = meshio.xdmf.TimeSeriesWriter(staging / path.name)
+            writer.h5_filename = str(staging / path.with_suffix(".h5").name)
+            writer.h5_file = h5py.File(writer.h5_filename, "w")
+            try:
+                writer.write_points_cells(rest, cells)
+                for _ in bar:
+                    with deferred():  # a frame is written whole
+                        writer.write_data(
+                            sim.time,
+                            point_data={
+                                "displacement": sim.positions - rest,
+                                "velocity": np.array(sim.velocities),
+                            },
+                        )
+                        done += 1
+            finally:
+                with deferred(then_raise=False):  # closing writes the .xdmf itself
+                    writer.__exit__(None, None, None)
             return path
         (staging / folder).mkdir()
+        texture = grid_texture_coordinates(sim.resolution)
         for n in bar:
             name = f"{path.stem}_{n:05d}" + (".vtu" if suffix == ".pvd" else ".obj")
-            mesh = meshio.Mesh(
-                np.array(sim.positions),
-                cells,
-                point_data={"velocity": np.array(sim.velocities)} if suffix == ".pvd" else None,
-            )
             with deferred():  # a frame is written whole
-                meshio.write(staging / folder / name, mesh)
                 if suffix == ".pvd":
+                    mesh = meshio.Mesh(
+                        np.array(sim.positions),
+                        cells,
+                        point_data={"velocity": np.array(sim.velocities)},
+                    )
+                    meshio.write(staging / folder / name, mesh)
                     entries.append((sim.time, f"{folder}/{name}"))
+                else:
+                    write_obj(staging / folder / name, sim.positions, cells[0][1], texture)
                 done += 1
         return path if suffix == ".pvd" else path.with_name(folder)
     except (Exception, KeyboardInterrupt) as error:

@@ -242,11 +242,10 @@ class SolverSpec:
         splits each step into equal substeps at most half the stable step;
         ``"ignore"`` runs as asked (the divergence guard still stops a blow-up).
     iterations : int, optional
-        Iterations per step of the iterative implicit methods (1 to 10000):
-        ``fast_mass_spring``'s local/global iterations (default 10; more are
-        closer to backward Euler, and cost more), ``backward_euler``'s most
-        Newton iterations (default 100). The other integrators do not iterate
-        and leave it unused.
+        ``fast_mass_spring``'s local/global iterations per step (1 to 10000;
+        default 10): more are closer to backward Euler, and cost more. The
+        other integrators leave it unused (``backward_euler`` iterates to its
+        residual tolerance).
 
     Examples
     --------

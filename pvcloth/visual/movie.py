@@ -5,6 +5,12 @@ place only when it is complete. If the run is interrupted (Ctrl-C, an error,
 a diverging simulation) after some frames, the writer is closed properly and
 the frames done so far become the output; with no frame done, no file is
 left. :class:`MovieInterrupted` says which happened.
+
+A GIF's frames get delays of whole centiseconds that add up to the movie's
+length (:func:`gif_delays`), and a frame rate above 50 is refused. An MP4 is
+H.264 with its index at the start (plays while it loads); a frame size with
+an odd side is padded by one row or column of edge pixels, never stretched,
+and :attr:`RenderStats.notes` says so.
 """
 
 from __future__ import annotations
@@ -26,6 +32,25 @@ if TYPE_CHECKING:  # for annotations only
     from pvcloth.physics.simulation import Simulation
 
 FORMATS = (".gif", ".mp4", ".png")
+#: Highest frame rate a GIF can show: its delays are whole centiseconds, and
+#: browsers slow a delay under 2 cs to about 10 cs.
+GIF_MAX_FPS = 50.0
+
+
+def gif_delays(frames: int, fps: float) -> list[int]:
+    """Centisecond delays of ``frames`` GIF frames whose running total stays
+    within half a centisecond of ``n / fps``: at 30 fps, 3, 4, 3, 3, 4, 3, ...
+    so the movie lasts what it should (a constant 3 cs would be 11 % fast).
+
+    Examples
+    --------
+    >>> gif_delays(6, 30.0)
+    [3, 4, 3, 3, 4, 3]
+    >>> sum(gif_delays(300, 30.0))  # centiseconds: ten seconds exactly
+    1000
+    """
+    ends = [round(100 * k / fps) for k in range(frames + 1)]
+    return [b - a for a, b in zip(ends, ends[1:], strict=False)]
 
 
 @dataclass
@@ -38,6 +63,8 @@ class RenderStats:
     drawing: list[float] = field(default_factory=list)
     encoding: list[float] = field(default_factory=list)
     closing: float = 0.0  # finishing the file (a GIF is quantised and written here)
+    #: What the writer changed and why (an MP4 padded to even sides).
+    notes: list[str] = field(default_factory=list)
 
     def medians_ms(self) -> dict[str, float]:
         """Median milliseconds per frame of each stage; encoding includes an
@@ -68,36 +95,62 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 class _FrameWriter:
-    """imageio writer for GIF/MP4, or a last-frame holder for PNG."""
+    """Writes GIF (Pillow, per-frame delays), MP4 (ffmpeg through imageio)
+    or, for PNG, keeps the last frame."""
 
-    def __init__(self, path: Path, fps: float):
-        import imageio.v2 as imageio
+    def __init__(self, path: Path, fps: float, notes: list[str]):
+        self.path, self.fps, self.notes, self.last = path, fps, notes, None
+        self.suffix = path.suffix.lower()
+        self.frames: list[np.ndarray] = []
+        self.writer = None
+        if self.suffix == ".mp4":
+            import imageio.v2 as imageio
 
-        self.path, self.last = path, None
-        suffix = path.suffix.lower()
-        if suffix == ".gif":
-            self.writer = imageio.get_writer(path, mode="I", duration=1000.0 / fps, loop=0)
-        elif suffix == ".mp4":
             self.writer = imageio.get_writer(
                 path,
                 fps=fps,
                 codec="libx264",
                 quality=7,
-                macro_block_size=2,
+                macro_block_size=1,  # sides are padded here, never stretched
                 ffmpeg_log_level="error",
+                # The index (moov) first: a browser plays while it loads.
+                output_params=["-movflags", "+faststart"],
             )
-        else:
-            self.writer = None
 
     def append(self, image: np.ndarray) -> None:
-        if self.writer is None:
-            self.last = image
-        else:
+        if self.suffix == ".mp4":
+            # H.264 in yuv420p needs even sides: pad with the edge pixels.
+            height, width = image.shape[:2]
+            if height % 2 or width % 2:
+                if not self.notes:
+                    self.notes.append(
+                        f"MP4 frames padded from {width}x{height} to "
+                        f"{width + width % 2}x{height + height % 2} (H.264 needs even sides)"
+                    )
+                image = np.pad(image, ((0, height % 2), (0, width % 2), (0, 0)), mode="edge")
             self.writer.append_data(image)
+        elif self.suffix == ".gif":
+            self.frames.append(image)
+        else:
+            self.last = image
 
     def close(self) -> None:
         if self.writer is not None:
             self.writer.close()
+        elif self.frames:
+            from PIL import Image
+
+            images = [Image.fromarray(frame) for frame in self.frames]
+            # Pillow takes milliseconds and stores whole centiseconds; it
+            # merges a frame identical to the one before, adding the delays.
+            images[0].save(
+                self.path,
+                format="GIF",
+                save_all=True,
+                append_images=images[1:],
+                duration=[10 * d for d in gif_delays(len(images), self.fps)],
+                loop=0,
+            )
         elif self.last is not None:
             import imageio.v2 as imageio
 
@@ -157,6 +210,13 @@ def render(
     path = Path(output)
     if path.suffix.lower() not in FORMATS:
         raise InputError("output", f"unknown extension {path.suffix!r}; use one of {FORMATS}")
+    if path.suffix.lower() == ".gif" and fps > GIF_MAX_FPS:
+        raise InputError(
+            "fps",
+            f"{fps:g} is more than a GIF can show (at most {GIF_MAX_FPS:g}: its delays are "
+            "whole centiseconds, and browsers slow delays under 2 cs to 10 cs); use a lower "
+            "fps or an MP4",
+        )
     frame_numbers = sim.frames(frames, fps, before_frame)  # checked before any work
     path.parent.mkdir(parents=True, exist_ok=True)
     # Hidden, named with this process's id: one left by a killed run is
@@ -182,7 +242,7 @@ def render(
         with deferred():
             view = ClothView(sim, plotter)
             plotter.show(auto_close=False)
-            writer = _FrameWriter(partial, fps)
+            writer = _FrameWriter(partial, fps, stats.notes)
         bar = frame_bar(frame_numbers, frames, f"rendering {path.name}", enabled=progress)
         t0 = time.perf_counter()
         for _ in bar:  # each frame's physics runs inside the loop's next()

@@ -62,7 +62,6 @@ class BackwardEuler(Integrator):
 
     name, order = "backward_euler", 1  # registry key; global order of accuracy
     description = "backward Euler, Newton to a 1e-7 m residual; the implicit methods' reference"
-    iterative = True
     interactive = False  # seconds per step at 64x64: not offered by the window's key
     #: Largest residual (m) over the points at which a step has converged.
     tolerance = 1e-7
@@ -136,7 +135,7 @@ class BackwardEuler(Integrator):
         raise DivergenceError(
             f"backward Euler did not converge at t = {state.t:.6g} s: Newton's method left "
             f"a residual of {size:.3g} m after {self.iterations} iterations (tolerance "
-            f"{self.tolerance:g} m); a smaller dt or more solver.iterations converge"
+            f"{self.tolerance:g} m); a smaller dt converges in fewer"
         )
 
     @staticmethod
