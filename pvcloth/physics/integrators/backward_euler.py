@@ -93,7 +93,7 @@ class BackwardEuler(Integrator):
         guess = x + dt * v
         residual = self._residual(model, x, v, guess, dt, control)
         size = np.abs(residual).max() / dt**2
-        solve, exact, fresh, banned = None, False, False, False
+        solve, exact, fresh, banned, forced = None, False, False, False, False
         factorisations, previous_size = 0, np.inf
         for count in range(self.iterations + 1):
             if size <= self.tolerance:
@@ -105,7 +105,7 @@ class BackwardEuler(Integrator):
             # (the exact one is indefinite where springs buckle, and its
             # Newton steps wander between solutions); close to it the exact
             # one, for quadratic convergence.
-            want_exact = size < self.exact_below and not banned
+            want_exact = (size < self.exact_below or forced) and not banned
             if solve is None or want_exact != exact or size > 0.5 * previous_size:
                 exact = want_exact
                 solve = self._factorise(model, guess, (guess - x) / dt, dt, mass, free, exact)
@@ -119,7 +119,7 @@ class BackwardEuler(Integrator):
             # residual falls (1e-4 of the predicted fall, as Armijo asks).
             norm = np.linalg.norm(residual)
             alpha, trial_norm = 1.0, np.nan
-            while alpha >= 1 / 64:
+            while alpha >= 1 / 1024:
                 trial = guess + alpha * correction
                 trial_residual = self._residual(model, x, v, trial, dt, control)
                 if np.linalg.norm(trial_residual) <= (1.0 - 1e-4 * alpha) * norm:
@@ -128,13 +128,17 @@ class BackwardEuler(Integrator):
                 alpha /= 2
             if not np.isfinite(trial_norm):
                 # No descent: a factor kept from an earlier iterate is
-                # redone here; a fresh exact one gives way to the clamped.
-                if fresh and not exact:
-                    break
-                banned = banned or (fresh and exact)
+                # redone here; a fresh exact one gives way to the clamped,
+                # and a fresh clamped one to the exact (once each).
+                if fresh and exact:
+                    banned, forced = True, False
+                elif fresh:
+                    if banned or forced:
+                        break
+                    forced = True
                 solve = None
                 continue
-            guess, residual, fresh = trial, trial_residual, False
+            guess, residual, fresh, forced = trial, trial_residual, False, False
             size = np.abs(residual).max() / dt**2
         raise DivergenceError(
             f"backward Euler did not converge at t = {state.t:.6g} s: Newton's method left "
