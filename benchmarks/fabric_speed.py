@@ -19,7 +19,7 @@ limit being 2.8/omega against symplectic Euler's 2/omega, and fourth
 order: its own error is far below what is measured here).
 
 At the sizes in ``--converged`` the implicit methods' error is split with
-``backward_euler`` (Newton until no point has more than 1e-4 m/s^2
+``backward_euler`` (Newton until no point has more than 1e-3 m/s^2
 unbalanced) at the same 1/60 s step:
 *time*, backward Euler's own distance from RK4 (only a smaller step lowers
 it), and *solver*, the method's distance from backward Euler (what stopping
@@ -152,7 +152,7 @@ def main() -> None:
         f"from RK4 at symplectic Euler's step, at the end (t = {duration:.3g} s). "
         "`fast_mass_spring:K` = K local/global iterations per step. For the implicit "
         f"methods, *time* is converged backward Euler's error at the same step (`{CONVERGED}`, "
-        "Newton until no point has more than 1e-4 m/s^2 unbalanced) and *solver* the "
+        "Newton until no point has more than 1e-3 m/s^2 unbalanced) and *solver* the "
         "method's distance from it.",
         "",
         "| points | method | dt (s) | ms per 1/60 s | real time | error vs RK4 (m) "

@@ -9,7 +9,7 @@ stable step (the step its ``stable_dt`` reports; half of it if 0.9 diverges) and
 RMS point distance at the end from an RK4 run at a quarter of the explicit
 step, and the total energy relative to it (implicit Euler's numerical
 damping shows as energy lost). The implicit methods' error is split with
-``backward_euler`` (Newton until no point has more than 1e-4 m/s^2
+``backward_euler`` (Newton until no point has more than 1e-3 m/s^2
 unbalanced) at the same 1/60 s step:
 its own error is the time discretisation's, and each method's distance
 from it is the solver's (one linearised Newton step for implicit Euler;

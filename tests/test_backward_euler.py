@@ -49,7 +49,7 @@ def test_one_step_is_the_root_of_the_implicit_equation():
 
     root = fsolve(equation, x0[3] + DT * v0, xtol=1e-13)
     sim.step()
-    assert sim.integrator.tolerance == 1e-4  # m/s^2 unbalanced: 2.8e-8 m at this step
+    assert sim.integrator.tolerance == 1e-3  # m/s^2 unbalanced: 2.8e-7 m at this step
     np.testing.assert_allclose(sim.positions[3], root, rtol=0, atol=1e-7)
     np.testing.assert_allclose(sim.positions[:3], x0[:3], rtol=0, atol=0)
     np.testing.assert_allclose(sim.velocities[3], (root - x0[3]) / DT, rtol=0, atol=1e-5)
@@ -57,7 +57,7 @@ def test_one_step_is_the_root_of_the_implicit_equation():
 
 def test_every_step_meets_the_stated_residual():
     """Cotton hung from two corners in a gusty wind: after every frame step
-    the implicit equation holds at every free point to the stated 1e-4 m/s^2
+    the implicit equation holds at every free point to the stated 1e-3 m/s^2
     of unbalanced acceleration; and at a tiny step too, where a tolerance in
     metres would take the first guess, which leaves the forces out."""
     scene = pvcloth.load_scene(SCENES / "cotton.toml").with_resolution(10)
@@ -71,7 +71,7 @@ def test_every_step_meets_the_stated_residual():
         x_new = sim.positions
         force = sim.model.compute_forces(x_new, (x_new - x) / DT)
         residual = x_new - x - DT * v - DT**2 * force / sim.model.mass[:, None]
-        assert np.abs(residual[free]).max() <= 1e-4 * DT**2
+        assert np.abs(residual[free]).max() <= 1e-3 * DT**2
         assert 1 <= sim.integrator.last_iterations <= 100
     tiny = Simulation(scene, integrator="backward_euler", dt=7e-5)
     explicit = Simulation(scene, integrator="symplectic_euler", dt=7e-5, stability="ignore")
