@@ -47,8 +47,9 @@ class Integrator(ABC):
     order : int
         Global order of accuracy.
     iterative : bool
-        Whether it iterates within a step, and so takes ``iterations``
-        (``solver.iterations`` in a scene) when it is made.
+        Whether it takes a fixed count of iterations per step, ``iterations``
+        when made (``solver.iterations`` in a scene); ``backward_euler``
+        iterates to a tolerance instead and is not one.
     interactive : bool
         Whether the window offers it when cycling integrators (a method
         that takes seconds per step is a measuring instrument, not one).
