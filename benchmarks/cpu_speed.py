@@ -10,7 +10,7 @@ checked here against pvcloth's step) when ``pip install taichi`` has been
 done; otherwise its columns are left out.
 
 Run:  python benchmarks/cpu_speed.py [--sizes 32 64 128 256] [--rounds 7]
-      (writes benchmarks/results/cpu_speed.md)
+      [--out FILE] (writes benchmarks/results/cpu_speed.md)
 """
 
 from __future__ import annotations
@@ -112,6 +112,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[32, 64, 128, 256])
     parser.add_argument("--rounds", type=int, default=7)
+    parser.add_argument("--out", type=Path, default=HERE / "results" / "cpu_speed.md")
     args = parser.parse_args()
     try:
         import taichi  # noqa: F401
@@ -151,16 +152,17 @@ def main() -> None:
         for key, median in medians.items():
             results.append((n, key, median, medians))
             print(f"{n:4d}  {key:42s} {1e3 * median:8.3f} ms")
-    write(results, checks, args.rounds, have_taichi)
+    write(results, checks, args.rounds, have_taichi, args.out, sys.argv[1:])
 
 
-def write(results, checks, rounds, have_taichi) -> None:
+def write(results, checks, rounds, have_taichi, out: Path, arguments: list[str]) -> None:
     import numba
 
+    command = " ".join(["python benchmarks/cpu_speed.py", *arguments])
     lines = [
         "# CPU step speed: pvcloth and Taichi side by side",
         "",
-        f"`python benchmarks/cpu_speed.py` on {platform.node()} ({os.cpu_count()} cores), "
+        f"`{command}` on {platform.node()} ({os.cpu_count()} cores), "
         f"Python {platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}"
         + (f", taichi {__import__('taichi').__version__}" if have_taichi else "")
         + f". Hanging scene (12 springs per point, gravity, air damping, two pins), "
@@ -205,7 +207,6 @@ def write(results, checks, rounds, have_taichi) -> None:
             "|---|---|---|",
         ]
         lines += [f"| {n} | {e['float32']:.1e} | {e['float64']:.1e} |" for n, e in checks]
-    out = HERE / "results" / "cpu_speed.md"
     out.write_text("\n".join(lines) + "\n")
     print(f"wrote {out}")
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import sys
@@ -12,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from pvcloth.errors import DivergenceError, InputError, SceneError
+from pvcloth.physics.blas import one_blas_thread
 from pvcloth.physics.integrators import get_integrator
 from pvcloth.physics.model import build_model
 from pvcloth.physics.state import Control, State
@@ -601,8 +603,9 @@ class Simulation:
         start = self.state.x[pinned].copy()
         goal = self.control.targets[pinned].copy()
         try:
-            for s in range(1, n + 1):
-                self._substep(pinned, start + (goal - start) * (s / n))
+            with self._one_pool():
+                for s in range(1, n + 1):
+                    self._substep(pinned, start + (goal - start) * (s / n))
         finally:  # after a divergence too: the mesh shows the last good state
             self.update_mesh()
 
@@ -665,9 +668,15 @@ class Simulation:
         self.owed = 0.0
         pinned = self.control.pinned_index
         try:
-            self._substep(pinned, self.control.targets[pinned])
+            with self._one_pool():
+                self._substep(pinned, self.control.targets[pinned])
         finally:
             self.update_mesh()
+
+    def _one_pool(self):
+        """On the compiled kernels, BLAS on one thread while stepping: their
+        OpenMP threads take the cores (see :mod:`pvcloth.physics.blas`)."""
+        return one_blas_thread() if self.model.backend == "numba" else contextlib.nullcontext()
 
     def _substep(self, pinned: np.ndarray, pin_positions: np.ndarray) -> None:
         dt = self.dt

@@ -16,6 +16,7 @@ time runs as fast as the machine allows.
 from __future__ import annotations
 
 import collections
+import contextlib
 import math
 import os
 import queue
@@ -26,6 +27,7 @@ from concurrent.futures import Future
 import numpy as np
 
 from pvcloth.errors import DivergenceError
+from pvcloth.physics.blas import one_blas_thread
 from pvcloth.physics.kernels import use_threads
 
 #: The state kept from before each of the last this many chunks: a
@@ -107,6 +109,7 @@ class PhysicsThread:
         self.drag = None
         self.step_cost: float | None = None
         self.chunk_ms = 0.0
+        self._held = contextlib.ExitStack()  # the BLAS limit while running
         self.chunk_started: float | None = None
         self.diverged: str | None = None
         self.meter = RealTimeMeter()
@@ -118,14 +121,21 @@ class PhysicsThread:
         self._thread = threading.Thread(target=self._loop, name="pvcloth-physics", daemon=True)
 
     def start(self) -> None:
+        """Start stepping, with BLAS held to one thread until :meth:`stop`
+        (the drawing needs the other core; see :mod:`pvcloth.physics.blas`).
+        The limit is taken here, on the calling thread: OpenBLAS ignored a
+        thread count set from another thread once the main one had set one."""
+        self._held.enter_context(one_blas_thread())
         self._thread.start()
 
     def stop(self) -> None:
-        """Finish the current chunk and end the thread."""
+        """Finish the current chunk, end the thread and give BLAS back its
+        threads."""
         self._stop = True
         self._wake()
         if self._thread.is_alive():
             self._thread.join()
+        self._held.close()
 
     def request(self, change, *args) -> Future:
         """Run ``change(*args)`` on this thread after what is queued."""
