@@ -25,7 +25,7 @@ def record_blas_threads_while_stepping(sim) -> list[set[int]]:
     return seen
 
 
-@pytest.mark.parametrize("integrator", ["implicit_euler", "backward_euler", "symplectic_euler"])
+@pytest.mark.parametrize("integrator", ["implicit_euler", "backward_euler", "fast_mass_spring"])
 def test_blas_is_held_to_one_thread_while_the_kernels_step(integrator):
     if not kernels.available():
         pytest.skip("numba is not installed")
@@ -65,3 +65,12 @@ def test_the_window_physics_thread_holds_blas_to_one_thread_on_the_numpy_path_to
         physics.stop()
         assert blas_threads() == {2}  # the thread gave the setting back
     assert seen and all(threads == {1} for threads in seen)
+
+
+def test_explicit_steps_skip_the_limit():
+    scene = pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8)))
+    sim = pvcloth.Simulation(scene, integrator="symplectic_euler")
+    seen = record_blas_threads_while_stepping(sim)
+    with threadpool_limits(limits=2, user_api="blas"):
+        sim.step()
+    assert seen == [{2}]

@@ -674,9 +674,12 @@ class Simulation:
             self.update_mesh()
 
     def _one_pool(self):
-        """On the compiled kernels, BLAS on one thread while stepping: their
-        OpenMP threads take the cores (see :mod:`pvcloth.physics.blas`)."""
-        return one_blas_thread() if self.model.backend == "numba" else contextlib.nullcontext()
+        """On the compiled kernels, BLAS on one thread while an integrator
+        that calls it steps: the kernels' OpenMP threads take the cores (see
+        :mod:`pvcloth.physics.blas`)."""
+        if self.model.backend == "numba" and self.integrator.uses_blas:
+            return one_blas_thread()
+        return contextlib.nullcontext()
 
     def _substep(self, pinned: np.ndarray, pin_positions: np.ndarray) -> None:
         dt = self.dt

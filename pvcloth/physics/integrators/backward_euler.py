@@ -70,6 +70,7 @@ class BackwardEuler(Integrator):
     name, order = "backward_euler", 1  # registry key; global order of accuracy
     description = "backward Euler, Newton to 1e-3 m/s^2 unbalanced; the implicit methods' reference"
     interactive = False  # seconds per step at 64x64: not offered by the window's key
+    uses_blas = True  # sparse solves and long dot products
     #: Largest unbalanced acceleration (m/s^2) of any point in a converged step.
     tolerance = 1e-3  # 1e-4 was measured to stall near 1e-3 on a 32x32 cotton step
     #: Unbalanced acceleration (m/s^2) below which Newton takes the exact Jacobian.

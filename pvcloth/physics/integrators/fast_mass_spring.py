@@ -63,6 +63,7 @@ class FastMassSpring(Integrator):
     description = "Liu et al. 2013 local/global backward Euler, prefactorised; damps"
     converges_to = "backward_euler"
     iterative = True
+    uses_blas = True  # sparse solves and long dot products
 
     def __init__(self, iterations: int = 10, rho: float = 0.95):
         self.iterations = iterations

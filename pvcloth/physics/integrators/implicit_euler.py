@@ -41,6 +41,7 @@ class ImplicitEuler(Integrator):
     name, order = "implicit_euler", 1  # registry key; global order of accuracy
     description = "Baraff-Witkin backward Euler; 1st order, stable at large steps, damps"
     converges_to = "backward_euler"
+    uses_blas = True  # sparse solves and long dot products
 
     def __init__(self, rtol: float = 1e-8, maxiter: int = 2000):
         self.rtol = rtol
