@@ -35,12 +35,13 @@ _LAZY = {
     **{name: ("physics.model", name) for name in ("Model", "build_model")},
     **{
         name: ("scene.spec", name)
-        for name in ("ClothSpec", "ObstacleSpec", "PinSpec", "Scene", "SolverSpec")
+        for name in ("CameraSpec", "ClothSpec", "ObstacleSpec", "PinSpec", "Scene", "SolverSpec")
         + ("SpringSpec", "SpringsSpec", "WindSpec", "load_scene")
     },
     "Simulation": ("physics.simulation", "Simulation"),
     **{name: ("physics.state", name) for name in ("Control", "State")},
     "render": ("visual.movie", "render"),
+    "compare": ("visual.compare", "compare"),
     "export": ("io.timeseries", "export"),
     "save_checkpoint": ("io.checkpoint", "save_checkpoint"),
     "load_checkpoint": ("io.checkpoint", "load_checkpoint"),
@@ -64,6 +65,7 @@ def __dir__() -> list[str]:
 
 __all__ = [
     "INTEGRATORS",
+    "CameraSpec",
     "CheckpointError",
     "ClothSpec",
     "Control",
@@ -88,6 +90,7 @@ __all__ = [
     "WindSpec",
     "__version__",
     "build_model",
+    "compare",
     "export",
     "get_integrator",
     "load_checkpoint",

@@ -24,6 +24,12 @@ def _add_overrides(parser: argparse.ArgumentParser) -> None:
         help="change a scene key, e.g. --set springs.structural.stiffness=2000 "
         "(dotted keys as in the scene file; repeat for more)",
     )
+    parser.add_argument(
+        "--view",
+        choices=("iso", "front", "side", "top"),
+        help="the same as --set camera.view=...: the direction the camera looks from "
+        "(an explicit camera: --set camera.position=[X,Y,Z] --set camera.focal_point=[X,Y,Z])",
+    )
     parser.add_argument("--integrator", help="the same as --set solver.integrator=NAME")
     parser.add_argument("--dt", type=float, help="the same as --set solver.dt=SECONDS")
     parser.add_argument(
@@ -32,6 +38,17 @@ def _add_overrides(parser: argparse.ArgumentParser) -> None:
         help="the same as --set solver.stability=...: a step above the stable one is refused, "
         "split into substeps, or run anyway",
     )
+
+
+def _add_colors(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--color",
+        metavar="FIELD",
+        help="colour the cloth by stretch, speed, force, energy or error (against a fine RK4 "
+        "reference run alongside), with a scalar bar in its unit",
+    )
+    parser.add_argument("--clim", metavar="LOW,HIGH", help="fixed colour range (default: grows)")
+    parser.add_argument("--cmap", metavar="NAME", help="colour map (matplotlib's names)")
 
 
 def _scene(args):
@@ -45,6 +62,7 @@ def _scene(args):
         ("solver.integrator", args.integrator),
         ("solver.dt", args.dt),
         ("solver.stability", args.stability),
+        ("camera.view", args.view),
     ):
         if value is not None:
             changes[key] = value
@@ -87,9 +105,38 @@ def cmd_simulate(args) -> None:
     )
 
 
+def cmd_compare(args) -> None:
+    from pvcloth.visual.compare import compare, parse_list, parse_steps
+    from pvcloth.visual.movie import parse_size
+    from pvcloth.visual.view import check_field
+
+    check_field(args.color)
+    integrators = parse_list("integrators", args.integrators)
+    dts = None if args.dts is None else parse_steps(args.dts)
+    size = None if args.size is None else parse_size(args.size)
+    stats = compare(
+        _scene(args),
+        args.output,
+        integrators,
+        dts=dts,
+        frames=args.frames,
+        fps=args.fps,
+        size=size,
+        color=args.color,
+        progress=not args.quiet,
+    )
+    print(f"wrote {stats.path} ({stats.frames} frames)")
+    for panel in stats.panels:
+        print("  " + panel.label().replace("\n", "; "))
+
+
 def cmd_render(args) -> None:
     from pvcloth.visual.movie import parse_size, render
+    from pvcloth.visual.view import check_cmap, check_field, parse_clim
 
+    check_field(args.color)
+    check_cmap(args.cmap)
+    clim = None if args.clim is None else parse_clim(args.clim)
     sim = _simulation(args)
     stats = render(
         sim,
@@ -98,6 +145,9 @@ def cmd_render(args) -> None:
         fps=args.fps,
         size=parse_size(args.size),
         progress=not args.quiet,
+        color=args.color,
+        clim=clim,
+        cmap=args.cmap,
     )
     ms = stats.medians_ms()
     print(
@@ -210,8 +260,39 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--frames", type=int, default=90, help="frames (default 90)")
     render.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
     render.add_argument("--size", default="640x480", help="WIDTHxHEIGHT (default 640x480)")
+    _add_colors(render)
     render.add_argument("--quiet", action="store_true", help="no progress bar")
     render.set_defaults(func=cmd_render)
+
+    compare = sub.add_parser(
+        "compare",
+        help="the same scene under several integrators, side by side in one movie",
+        description="One panel per integrator under one camera, each labelled with its step, "
+        "the wall time it takes per simulated second and its RMS distance from a fine RK4 "
+        "reference run alongside.",
+    )
+    _add_overrides(compare)
+    compare.add_argument(
+        "--integrators",
+        required=True,
+        metavar="A,B,...",
+        help="comma-separated, one panel each, e.g. symplectic_euler,rk4,fast_mass_spring",
+    )
+    compare.add_argument(
+        "--dts",
+        metavar="DT,...",
+        help="each panel's step in seconds (auto = the automatic step; 1/60 allowed), "
+        "one for all or one per integrator",
+    )
+    compare.add_argument("-o", "--output", required=True, help="OUT.gif, OUT.mp4 or OUT.png")
+    compare.add_argument("--frames", type=int, default=90, help="frames (default 90)")
+    compare.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
+    compare.add_argument("--size", help="WIDTHxHEIGHT of the whole frame (default 480x360 a panel)")
+    compare.add_argument(
+        "--color", metavar="FIELD", help="colour every cloth by a field (as for render)"
+    )
+    compare.add_argument("--quiet", action="store_true", help="no progress bar")
+    compare.set_defaults(func=cmd_compare)
 
     exp = sub.add_parser(
         "export", help="write a time series for ParaView (.pvd, .xdmf) or Blender (.obj)"

@@ -194,6 +194,36 @@ class Obstacle:
     def _shape_text(self) -> str:
         raise NotImplementedError
 
+    def surface(self, extent: float) -> tuple[np.ndarray, np.ndarray]:
+        """The real surface (not grown by the thickness) as triangles, in the
+        obstacle's own frame, for drawing: ``(vertices, triangles)``.
+
+        Parameters
+        ----------
+        extent : float
+            Size in metres to draw an unbounded surface at (the ground's
+            side); bounded shapes ignore it.
+
+        Returns
+        -------
+        vertices : ndarray, shape (V, 3)
+            Metres, in the obstacle's frame (:meth:`to_world` places them).
+        triangles : ndarray of int, shape (T, 3)
+            Vertex indices, counter-clockwise seen from outside.
+
+        A new obstacle shape gives its own; the views draw whatever it gives.
+        """
+        raise NotImplementedError(f"{type(self).__name__} has no surface(): give it one to draw it")
+
+
+def _grid_triangles(rows: int, columns: int) -> np.ndarray:
+    """Two triangles per cell of a ``rows`` x ``columns`` vertex grid laid
+    out row by row (counter-clockwise when rows run along +v, columns +u)."""
+    k = np.arange(rows * columns).reshape(rows, columns)
+    a, b = k[:-1, :-1].ravel(), k[:-1, 1:].ravel()
+    c, d = k[1:, 1:].ravel(), k[1:, :-1].ravel()
+    return np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
+
 
 class Sphere(Obstacle):
     """A sphere of ``radius`` about its centre."""
@@ -233,6 +263,20 @@ class Sphere(Obstacle):
 
     def _shape_text(self):
         return "sphere r = {:g} m at ({:g}, {:g}, {:g})".format(self.radius, *self.center)
+
+    def surface(self, extent, rings: int = 32, segments: int = 48):
+        """A latitude-longitude sphere; the poles are rings of coincident
+        vertices, which draw as points (their triangles have no area)."""
+        polar = np.linspace(0.0, np.pi, rings + 1)[:, None]
+        azimuth = np.linspace(0.0, 2.0 * np.pi, segments + 1)[None, :]
+        unit = np.stack(
+            np.broadcast_arrays(
+                np.sin(polar) * np.cos(azimuth), np.sin(polar) * np.sin(azimuth), np.cos(polar)
+            ),
+            axis=-1,
+        ).reshape(-1, 3)
+        # Rows run from the north pole down: reverse the winding to face out.
+        return self.radius * unit, _grid_triangles(rings + 1, segments + 1)[:, ::-1]
 
 
 class Box(Obstacle):
@@ -280,6 +324,22 @@ class Box(Obstacle):
         outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
         return outside + np.minimum(q.max(axis=1), 0.0)
 
+    def surface(self, extent):
+        """Six faces of four vertices each (so each face shades flat)."""
+        vertices, triangles = [], []
+        for axis in range(3):
+            u, w = (axis + 1) % 3, (axis + 2) % 3
+            for sign in (-1.0, 1.0):
+                corners = np.zeros((4, 3))
+                corners[:, axis] = sign
+                corners[:, u] = [-1.0, 1.0, 1.0, -1.0]
+                corners[:, w] = [-1.0, -1.0, 1.0, 1.0]
+                first = 4 * len(vertices)
+                quad = [[0, 1, 2], [0, 2, 3]] if sign > 0 else [[0, 2, 1], [0, 3, 2]]
+                triangles += [[first + i for i in tri] for tri in quad]
+                vertices.append(0.5 * self.size * corners)
+        return np.concatenate(vertices), np.array(triangles)
+
     def _shape_text(self):
         text = "box {:g} x {:g} x {:g} m at ({:g}, {:g}, {:g})".format(*self.size, *self.center)
         if any(self.angles):
@@ -325,6 +385,12 @@ class Ground(Obstacle):
 
     def distance(self, points, t=0.0):
         return (points - self.center_at(t)) @ self.normal
+
+    def surface(self, extent):
+        """A square of side ``extent`` centred on the plane's point."""
+        h = 0.5 * extent
+        vertices = np.array([[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]])
+        return vertices, np.array([[0, 1, 2], [0, 2, 3]])
 
     def _shape_text(self):
         return "ground through ({:g}, {:g}, {:g}), normal ({:.3g}, {:.3g}, {:.3g})".format(

@@ -229,6 +229,9 @@ class Simulation:
         - ``velocity`` (N, 3), m/s
         - ``speed`` (N,), m/s
         - ``stretch`` (N,), local length over rest length (1 at rest)
+        - ``force`` (N,), N, mean elastic force of the springs at the point
+        - ``energy`` (N,), J/m^2, elastic energy density
+          (:mod:`pvcloth.physics.fields`)
         - ``pinned`` (N,), 1 where the point is pinned, else 0
 
         Examples
@@ -242,7 +245,7 @@ class Simulation:
         >>> sim.mesh is mesh, bool(mesh.points[:, 2].min() < sim.model.rest_positions[:, 2].min())
         (True, True)
         >>> sorted(mesh.point_data.keys())
-        ['pinned', 'speed', 'stretch', 'velocity']
+        ['energy', 'force', 'pinned', 'speed', 'stretch', 'velocity']
         """
         if self._mesh is None:
             from pvcloth.visual.view import (

@@ -329,6 +329,76 @@ class WindSpec:
         _set(self, "seed", integer("seed", self.seed, minimum=0, maximum=2**63 - 1))
 
 
+#: Directions a camera preset looks from (see :mod:`pvcloth.visual.camera`).
+CAMERA_VIEWS = ("iso", "front", "side", "top")
+
+
+@dataclass(frozen=True)
+class CameraSpec:
+    """How movies look at the scene; the window starts from it too.
+
+    Parameters
+    ----------
+    view : {"iso", "front", "side", "top"}
+        The direction looked from: ``iso`` from the front, right and above;
+        ``front`` along +y; ``side`` along -x; ``top`` down -z.
+    follow : bool
+        Move with the cloth so it fills the frame through the motion (the
+        default); ``False`` fixes the camera on the region the cloth can
+        reach.
+    position, focal_point : (float, float, float), optional
+        An explicit, fixed camera in metres: both or neither. When given,
+        ``view`` and ``follow`` are not used.
+    up : (float, float, float)
+        View-up vector of an explicit camera.
+
+    Examples
+    --------
+    >>> from pvcloth import Scene
+    >>> Scene.from_dict({"camera": {"view": "side"}}).camera.view
+    'side'
+    >>> Scene.from_dict({"camera": {"position": [0, -3, 1], "focal_point": [0, 0, 0]}}).camera.up
+    (0.0, 0.0, 1.0)
+    """
+
+    view: str = "iso"
+    follow: bool = True
+    position: tuple[float, float, float] | None = None
+    focal_point: tuple[float, float, float] | None = None
+    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
+
+    def __post_init__(self):
+        _set(self, "view", choice("view", self.view, CAMERA_VIEWS))
+        if not isinstance(self.follow, bool):
+            raise SceneError("follow", f"expected true or false, got {self.follow!r}")
+        if (self.position is None) != (self.focal_point is None):
+            raise SceneError(
+                "position" if self.position is None else "focal_point",
+                "an explicit camera needs both position and focal_point",
+            )
+        _set(self, "up", vector("up", self.up, 3, **_POSITION))
+        if math.hypot(*self.up) == 0.0:
+            raise SceneError("up", "must not be the zero vector")
+        if self.position is not None:
+            _set(self, "position", vector("position", self.position, 3, **_POSITION))
+            _set(self, "focal_point", vector("focal_point", self.focal_point, 3, **_POSITION))
+            sight = [a - b for a, b in zip(self.position, self.focal_point, strict=True)]
+            if math.hypot(*sight) == 0.0:
+                raise SceneError("position", "must differ from focal_point")
+            cross = (
+                sight[1] * self.up[2] - sight[2] * self.up[1],
+                sight[2] * self.up[0] - sight[0] * self.up[2],
+                sight[0] * self.up[1] - sight[1] * self.up[0],
+            )
+            if math.hypot(*cross) <= 1e-9 * math.hypot(*sight) * math.hypot(*self.up):
+                raise SceneError("up", f"{self.up} is along the line of sight; give another")
+
+    @property
+    def explicit(self) -> bool:
+        """Whether a fixed position and focal point are given."""
+        return self.position is not None
+
+
 OBSTACLE_TYPES = ("sphere", "box", "ground")
 #: Keys each obstacle type uses besides the common ones.
 _OBSTACLE_KEYS = {"sphere": ("radius",), "box": ("size", "rotation"), "ground": ("normal",)}
@@ -460,6 +530,8 @@ class Scene:
     obstacles : tuple of ObstacleSpec
         Spheres, boxes and ground planes; none by default (and then no
         collision code runs).
+    camera : CameraSpec
+        How movies look at the scene (no effect on the physics).
 
     Examples
     --------
@@ -478,6 +550,7 @@ class Scene:
     air_damping: float = 0.0
     wind: WindSpec | None = None
     obstacles: tuple[ObstacleSpec, ...] = ()
+    camera: CameraSpec = field(default_factory=CameraSpec)
 
     def __post_init__(self):
         if not isinstance(self.name, str):
@@ -697,7 +770,13 @@ def html_table(title: str, rows) -> str:
     return f"<table><caption><b>{html.escape(title)}</b></caption>{body}</table>"
 
 
-_NESTED = {"cloth": ClothSpec, "springs": SpringsSpec, "pins": PinSpec, "solver": SolverSpec}
+_NESTED = {
+    "cloth": ClothSpec,
+    "springs": SpringsSpec,
+    "pins": PinSpec,
+    "solver": SolverSpec,
+    "camera": CameraSpec,
+}
 
 
 def _spec_from_dict(cls, data, path: str):

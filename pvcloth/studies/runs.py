@@ -115,3 +115,50 @@ def rms_distance(x: np.ndarray, reference: np.ndarray) -> float:
     0.7071067811865476
     """
     return float(np.sqrt(np.mean(np.sum((x - reference) ** 2, axis=1))))
+
+
+class FollowingReference:
+    """A fine reference run kept at the time of the simulation it follows,
+    for the ``error`` field of movies and ``pvcloth compare``.
+
+    It runs the followed simulation's scene (its edits included) with
+    :data:`REFERENCE_INTEGRATOR` at a quarter of the followed step, at most
+    half its own stable step, from the followed simulation's state when it
+    is made. A script
+    that moves pins between frames must move the reference's too (the movie
+    does: it hands ``before_frame`` both).
+
+    Parameters
+    ----------
+    sim : Simulation
+        The simulation to follow, at its start.
+    dt : float, optional
+        The reference's step instead of the rule above.
+
+    Examples
+    --------
+    >>> import pvcloth
+    >>> from pvcloth.studies.runs import FollowingReference
+    >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
+    >>> reference = FollowingReference(sim)
+    >>> sim.advance(0.1)
+    >>> error = reference.error(sim)  # metres, per point
+    >>> error.shape, bool(error.max() < 1e-3)
+    ((64,), True)
+    """
+
+    def __init__(self, sim: Simulation, dt: float | None = None):
+        scene = sim.scene
+        if dt is None:
+            limit = Simulation(scene, integrator=REFERENCE_INTEGRATOR, stability="ignore")
+            dt = min(sim.dt / 4, 0.5 * limit.stable_dt())
+        self.sim = Simulation(scene, integrator=REFERENCE_INTEGRATOR, dt=dt, stability="ignore")
+        self.sim.state = sim.state.copy() if sim.time > 0 else self.sim.state
+
+    def error(self, sim: Simulation) -> np.ndarray:
+        """Distance (m) of each of ``sim``'s points from the reference's at
+        ``sim``'s time, shape (N,); the reference is advanced to that time."""
+        behind = sim.time - self.sim.time
+        if behind > 0:
+            self.sim.advance(behind)
+        return np.linalg.norm(sim.positions - self.sim.positions, axis=1)

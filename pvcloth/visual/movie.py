@@ -166,6 +166,11 @@ def render(
     size: tuple[int, int] = (640, 480),
     progress: bool = True,
     before_frame=None,
+    color: str | None = None,
+    clim: tuple[float, float] | None = None,
+    cmap: str | None = None,
+    label: bool = True,
+    antialias: bool = True,
 ) -> RenderStats:
     """Run a simulation and write what it looks like.
 
@@ -186,7 +191,22 @@ def render(
         Show a progress bar with frame rate and time left.
     before_frame : callable, optional
         ``before_frame(sim, n)`` is called before frame ``n`` is advanced,
-        e.g. to move a pin along a scripted path.
+        e.g. to move a pin along a scripted path (with ``color="error"``, for
+        the reference run too).
+    color : str, optional
+        Colour the cloth by a field (``"stretch"``, ``"speed"``, ``"force"``,
+        ``"energy"`` or ``"error"``; see :data:`pvcloth.visual.view.FIELDS`),
+        with a scalar bar in its unit. ``"error"`` runs a fine RK4 reference
+        beside the simulation (:class:`pvcloth.studies.runs.FollowingReference`).
+    clim : (float, float), optional
+        Fixed colour range; by default it grows with the values seen.
+    cmap : str, optional
+        Colour map name (matplotlib's); each field has its own default.
+    label : bool
+        Write time, integrator and step in the corner.
+    antialias : bool
+        FXAA (cheap anti-aliasing: a few ms per frame under software GL,
+        ``benchmarks/results/render_cost.md``).
 
     Returns
     -------
@@ -206,7 +226,41 @@ def render(
     >>> stats = pvcloth.render(sim, "hanging.gif", frames=6, size=(160, 120), progress=False)
     >>> stats.path.name, stats.frames, round(sim.time, 3)
     ('hanging.gif', 6, 0.167)
+    >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(12, 12))))
+    >>> stats = pvcloth.render(sim, "stretch.png", frames=6, color="stretch", progress=False)
     """
+    path = check_output(output, fps)
+    from pvcloth.visual.view import check_cmap, check_field
+
+    check_field(color)
+    check_cmap(cmap)
+    reference = None
+    if color == "error":
+        from pvcloth.studies.runs import FollowingReference
+
+        reference = FollowingReference(sim)
+        if before_frame is not None:
+            scripted = before_frame
+
+            def before_frame(sim, n):  # the reference gets the script's moves too
+                scripted(sim, n)
+                scripted(reference.sim, n)
+
+    frame_numbers = sim.frames(frames, fps, before_frame)  # checked before any work
+
+    def build(plotter):
+        from pvcloth.visual.view import ClothView
+
+        view = ClothView(
+            sim, plotter, color=color, clim=clim, cmap=cmap, reference=reference, label=label
+        )
+        return view.update, lambda: f"t={sim.time:.2f}s"
+
+    return record(path, fps, frames, frame_numbers, build, size, progress, antialias)
+
+
+def check_output(output: str | os.PathLike, fps: float) -> Path:
+    """The movie's path, once its format and frame rate are known to fit."""
     path = Path(output)
     if path.suffix.lower() not in FORMATS:
         raise InputError("output", f"unknown extension {path.suffix!r}; use one of {FORMATS}")
@@ -217,7 +271,30 @@ def render(
             "whole centiseconds, and browsers slow delays under 2 cs to 10 cs); use a lower "
             "fps or an MP4",
         )
-    frame_numbers = sim.frames(frames, fps, before_frame)  # checked before any work
+    return path
+
+
+def record(
+    path: Path,
+    fps: float,
+    frames: int,
+    frame_numbers,
+    build,
+    size: tuple[int, int],
+    progress: bool,
+    antialias: bool = True,
+    layout: dict | None = None,
+) -> RenderStats:
+    """The frame loop of every movie: off-screen plotter, frames drawn and
+    written as the simulation advances, the file moved into place whole, a
+    shorter valid movie kept when interrupted.
+
+    ``build(plotter)`` adds what is drawn and returns ``(update, status)``:
+    ``update()`` refreshes it before each frame, ``status()`` is the progress
+    bar's note. ``frame_numbers`` advances the simulation(s) as it is
+    iterated. ``layout`` holds the plotter's panel keywords (``shape``,
+    ``row_weights``).
+    """
     path.parent.mkdir(parents=True, exist_ok=True)
     # Hidden, named with this process's id: one left by a killed run is
     # removed by the next run's atomic_write clean-up.
@@ -230,17 +307,26 @@ def render(
     with deferred():  # a signal inside VTK's module set-up crashed the process
         import pyvista as pv
 
-        from pvcloth.visual.view import ClothView, use_offscreen_gl_if_headless
+        from pvcloth.visual.view import use_offscreen_gl_if_headless
 
         use_offscreen_gl_if_headless()
-        plotter = pv.Plotter(off_screen=True, notebook=False, window_size=list(size))
+        plotter = pv.Plotter(
+            off_screen=True, notebook=False, window_size=list(size), **(layout or {})
+        )
     writer = None
     # Only the physics is interrupted at once: a Ctrl-C or SIGTERM that comes
     # while VTK draws (which would swallow it), or while a frame is appended
     # or the file finished, takes effect when that step is done.
     try:
         with deferred():
-            view = ClothView(sim, plotter)
+            update, status = build(plotter)
+            # FXAA instead of PyVista's default 4x MSAA: 640x480 drape frame
+            # 30 ms against 49 ms under Mesa (15.6 ms with neither). Set on
+            # VTK directly: PyVista swaps FXAA for the costlier SSAA under
+            # EGL, though VTK's FXAA pass draws there (checked on pictures).
+            plotter.render_window.SetMultiSamples(0)
+            for renderer in plotter.renderers:
+                renderer.SetUseFXAA(bool(antialias))
             plotter.show(auto_close=False)
             writer = _FrameWriter(partial, fps, stats.notes)
         bar = frame_bar(frame_numbers, frames, f"rendering {path.name}", enabled=progress)
@@ -248,7 +334,7 @@ def render(
         for _ in bar:  # each frame's physics runs inside the loop's next()
             t1 = time.perf_counter()
             with deferred():
-                view.update()
+                update()
                 plotter.render()
                 image = plotter.screenshot(return_img=True)
                 t2 = time.perf_counter()
@@ -258,7 +344,7 @@ def render(
             stats.physics.append(t1 - t0)
             stats.drawing.append(t2 - t1)
             stats.encoding.append(t3 - t2)
-            bar.set_postfix_str(f"t={sim.time:.2f}s")
+            bar.set_postfix_str(status())
             t0 = time.perf_counter()
         with deferred():
             t0 = time.perf_counter()

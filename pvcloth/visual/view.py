@@ -1,19 +1,34 @@
-"""The view: a PyVista StructuredGrid of the cloth, refreshed from the state.
+"""The view: the cloth and its scene drawn in a PyVista plotter.
 
-Rendering reads the simulation; it never changes it. Points are refreshed by
-assignment (``grid.points = x``), which tells VTK they changed, so the mesh is
-added once and smooth shading follows it.
+Rendering reads the simulation; it never changes it. Two meshes show the
+cloth:
+
+- ``Simulation.mesh``, a ``pyvista.StructuredGrid`` of dimensions
+  ``(nx, ny, 1)`` with every field as point data (:func:`cloth_mesh`), for
+  users, notebooks and exports;
+- the view's own ``PolyData`` of the same points (:class:`ClothView`), with
+  normals computed from the grid and only the field it is coloured by, so a
+  frame costs a copy and one field (a StructuredGrid is turned into a
+  surface and its normals recomputed by a VTK pipeline on every change).
+
+Fields (:data:`FIELDS`) are per point, with units; ``error`` needs a
+reference run beside the simulation (:class:`pvcloth.studies.runs.FollowingReference`).
 """
 
 from __future__ import annotations
 
+import math
 import os
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pyvista as pv
 
+from pvcloth.errors import InputError
+from pvcloth.physics.fields import spring_fields
 from pvcloth.physics.grid import point_stretch
+from pvcloth.visual.camera import VIEWS, FramingCamera
 
 if TYPE_CHECKING:  # for annotations only
     from pvcloth.physics.simulation import Simulation
@@ -31,30 +46,101 @@ def use_offscreen_gl_if_headless() -> None:
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
 
+#: Front of the cloth (the side its grid normal points to) and back.
 CLOTH_COLOR = "#c8553d"
+CLOTH_BACK_COLOR = "#4f7fae"
 BACK_COLOR = "#b7bfc9"
 OBSTACLE_COLOR = "#8fa3b8"
-GROUND_COLOR = "#d9d4c7"
+#: The ground's checker: two close tones, so motion over it reads.
+GROUND_COLORS = ("#ddd8cc", "#c9c3b5")
 
 
-def obstacle_mesh(obstacle, extent: float) -> pv.PolyData:
-    """A surface of the obstacle in its own frame (the actor's matrix places it).
+@dataclass(frozen=True)
+class FieldStyle:
+    """How a field is shown: scalar-bar title (with unit) and colour map."""
 
-    The ground is drawn as a square of side ``extent`` around its point.
+    title: str
+    cmap: str
+    #: Values the colour range always includes (1 for stretch: at rest).
+    anchor: float = 0.0
+    #: Colour range symmetric about the anchor (a diverging map).
+    symmetric: bool = False
+
+
+#: The fields a cloth can be coloured by (``--color``), all per point.
+FIELDS = {
+    "stretch": FieldStyle("stretch (length / rest length)", "coolwarm", 1.0, True),
+    "speed": FieldStyle("speed (m/s)", "viridis"),
+    "force": FieldStyle("spring force (N)", "magma"),
+    "energy": FieldStyle("elastic energy (J/m^2)", "inferno"),
+    "error": FieldStyle("distance from the reference (m)", "plasma"),
+}
+
+
+def check_field(name: str | None) -> str | None:
+    """``name`` if it is a field of :data:`FIELDS` (or ``None``), else a
+    clear :class:`~pvcloth.errors.InputError`."""
+    if name is not None and name not in FIELDS:
+        raise InputError("color", f"{name!r} is not a field; choose one of {', '.join(FIELDS)}")
+    return name
+
+
+def check_cmap(name: str | None) -> str | None:
+    """``name`` if matplotlib knows the colour map (or ``None``), else a clear
+    :class:`~pvcloth.errors.InputError`."""
+    if name is None:
+        return None
+    import matplotlib
+
+    if name not in matplotlib.colormaps:
+        close = [known for known in sorted(matplotlib.colormaps) if known.lower() == name.lower()]
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise InputError(
+            "cmap", f"{name!r} is not a colour map{hint}; e.g. viridis, coolwarm, magma, plasma"
+        )
+    return name
+
+
+def point_fields(sim: Simulation, names, reference=None) -> dict[str, np.ndarray]:
+    """The fields ``names`` of the simulation's current state, per point.
+
+    ``velocity`` (N, 3) m/s, ``speed`` m/s, ``stretch`` (length over rest
+    length), ``force`` N and ``energy`` J/m^2 (:mod:`pvcloth.physics.fields`),
+    ``pinned`` (1 or 0), and ``error`` m, the distance from ``reference``
+    (a :class:`~pvcloth.studies.runs.FollowingReference`) at the same time.
     """
-    if obstacle.name == "sphere":
-        return pv.Sphere(radius=obstacle.radius, theta_resolution=48, phi_resolution=32)
-    if obstacle.name == "box":
-        return pv.Box(bounds=np.column_stack([-0.5 * obstacle.size, 0.5 * obstacle.size]).ravel())
-    return pv.Plane(i_size=extent, j_size=extent, i_resolution=1, j_resolution=1)
+    state = sim.state  # one state throughout, should a physics thread replace it
+    x = state.x.copy()
+    fields: dict[str, np.ndarray] = {}
+    for name in names:
+        if name == "velocity":
+            fields[name] = state.v.copy()
+        elif name == "speed":
+            fields[name] = np.linalg.norm(state.v, axis=1)
+        elif name == "stretch":
+            fields[name] = point_stretch(x, sim.model.rest_positions, sim.model.shape)
+        elif name in ("force", "energy"):
+            if "force" not in fields:
+                fields.update(spring_fields(sim.model, x))
+        elif name == "pinned":
+            fields[name] = sim.control.pinned.astype(np.uint8)
+        elif name == "error":
+            if reference is None:
+                raise InputError("color", "the error field needs a reference run beside the cloth")
+            fields[name] = reference.error(sim)
+        else:
+            raise InputError("field", f"{name!r} is not a field of the cloth")
+    return {name: fields[name] for name in names}
 
 
-def obstacle_matrix(obstacle, t: float) -> np.ndarray:
-    """4x4 matrix from the obstacle's frame to the world at time ``t``."""
-    matrix = np.eye(4)
-    matrix[:3, :3] = obstacle.axes
-    matrix[:3, 3] = obstacle.center_at(t)
-    return matrix
+#: Point data of ``Simulation.mesh`` (``error`` is added where a view has a
+#: reference), with scalar-bar titles.
+MESH_FIELDS = ("velocity", "speed", "stretch", "force", "energy", "pinned")
+FIELD_TITLES = {
+    "velocity": "velocity (m/s)",
+    "pinned": "pinned (1 = yes)",
+    **{name: style.title for name, style in FIELDS.items()},
+}
 
 
 def cloth_grid(positions: np.ndarray, resolution: tuple[int, int]) -> pv.StructuredGrid:
@@ -97,50 +183,148 @@ def update_cloth_mesh(grid: pv.StructuredGrid, sim: Simulation) -> None:
     array is made the active scalars: a plotter that draws the grid in one
     colour keeps doing so.
     """
-    state = sim.state  # one state throughout, should a physics thread replace it
-    positions = state.x.copy()
-    grid.points = positions
-    velocity = state.v.copy()
-    fields = {
-        "velocity": velocity,
-        "speed": np.linalg.norm(velocity, axis=1),
-        "stretch": point_stretch(positions, sim.model.rest_positions, sim.model.shape),
-        "pinned": sim.control.pinned.astype(np.uint8),
-    }
-    for name, values in fields.items():
+    grid.points = sim.state.x.copy()
+    for name, values in point_fields(sim, MESH_FIELDS).items():
         grid.point_data.set_array(values, name)
 
 
-#: Scalar-bar titles, with units, of the point data on ``Simulation.mesh``.
-FIELD_TITLES = {
-    "velocity": "velocity (m/s)",
-    "speed": "speed (m/s)",
-    "stretch": "stretch (length / rest length)",
-    "pinned": "pinned (1 = yes)",
-}
+def grid_faces(shape: tuple[int, int]) -> np.ndarray:
+    """VTK's face array of the quads of a ``(ny, nx)`` point grid."""
+    ny, nx = shape
+    k = np.arange(nx * ny).reshape(ny, nx)
+    a, b, c, d = k[:-1, :-1].ravel(), k[:-1, 1:].ravel(), k[1:, 1:].ravel(), k[1:, :-1].ravel()
+    return np.column_stack([np.full(a.size, 4), a, b, c, d]).ravel()
 
 
-def plot_cloth(sim: Simulation, **kwargs):
-    """``sim.mesh.plot(**kwargs)`` in the cloth's colour and smooth shading,
-    unless ``scalars`` or ``color`` say otherwise; a field of the mesh gets a
-    scalar bar titled with its unit."""
-    scalars = kwargs.get("scalars")
-    if scalars is None:
-        kwargs.setdefault("color", CLOTH_COLOR)
-    elif isinstance(scalars, str) and scalars in FIELD_TITLES:
-        bar = dict(kwargs.get("scalar_bar_args") or {})
-        bar.setdefault("title", FIELD_TITLES[scalars])
-        bar.setdefault("fmt", "%.4g")  # stretch varies in the third decimal
-        kwargs["scalar_bar_args"] = bar
-    kwargs.setdefault("smooth_shading", True)
-    use_offscreen_gl_if_headless()
-    return sim.mesh.plot(**kwargs)
+def grid_normals(x: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """Unit normals of the cloth at its points, shape (N, 3): the cross
+    product of the grid's two tangents (central differences inside, one-sided
+    on the border). The front of the cloth is the side they point to.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pvcloth.visual.view import grid_normals
+    >>> i, j = np.meshgrid(np.arange(3.0), np.arange(2.0))
+    >>> flat = np.column_stack([i.ravel(), j.ravel(), np.zeros(6)])  # in the x-y plane
+    >>> grid_normals(flat, (2, 3))[0].tolist()
+    [0.0, 0.0, 1.0]
+    """
+    grid = x.reshape(shape + (3,))
+    normal = np.cross(np.gradient(grid, axis=1), np.gradient(grid, axis=0)).reshape(-1, 3)
+    length = np.linalg.norm(normal, axis=1, keepdims=True)
+    return normal / np.maximum(length, 1e-300)
+
+
+def nice_ceiling(value: float) -> float:
+    """The smallest of 1, 2, 2.5, 5 times a power of ten that is at least
+    ``value`` (> 0): colour-range ends that read well and change rarely.
+
+    Examples
+    --------
+    >>> from pvcloth.visual.view import nice_ceiling
+    >>> nice_ceiling(0.0123), nice_ceiling(3.0), nice_ceiling(7.0)
+    (0.02, 5.0, 10.0)
+    """
+    power = 10.0 ** math.floor(math.log10(value))
+    for step in (1.0, 2.0, 2.5, 5.0, 10.0):
+        if value <= step * power * (1 + 1e-12):
+            return step * power
+    return 10.0 * power
+
+
+class ColorRange:
+    """A colour range that only grows: a colour means the same value from
+    the frame it first appears on (a range refitted to every frame would
+    let colours drift while the values stand still).
+
+    The range is the anchor to a rounded-up extreme of everything seen (for
+    stretch, symmetric about 1); a fixed ``clim`` never changes.
+
+    Examples
+    --------
+    >>> from pvcloth.visual.view import ColorRange
+    >>> scale = ColorRange("stretch")
+    >>> scale.update([0.999, 1.004])
+    (0.995, 1.005)
+    >>> scale.update([1.001])  # a calmer frame keeps the range
+    (0.995, 1.005)
+    """
+
+    def __init__(self, field: str, clim=None):
+        self.style = FIELDS[field]
+        self.fixed = None if clim is None else (float(clim[0]), float(clim[1]))
+        self.span = 0.0
+
+    def update(self, values) -> tuple[float, float]:
+        if self.fixed is not None:
+            return self.fixed
+        values = np.asarray(values, dtype=float)
+        finite = values[np.isfinite(values)]
+        anchor = self.style.anchor
+        reach = float(np.abs(finite - anchor).max(initial=0.0))
+        if reach > self.span:
+            self.span = nice_ceiling(reach) if reach > 0 else 0.0
+        span = self.span or (1e-3 if self.style.symmetric else 1e-6)
+        if self.style.symmetric:
+            return anchor - span, anchor + span
+        low = min(anchor, float(finite.min(initial=anchor)))
+        return low, low + span
+
+
+def parse_clim(text: str) -> tuple[float, float]:
+    """``"LOW,HIGH"`` -> ``(LOW, HIGH)`` with ``LOW < HIGH``, or a clear error."""
+    try:
+        low, high = (float(part) for part in text.split(","))
+    except ValueError:
+        raise InputError("clim", f"expected LOW,HIGH like 0.99,1.01, got {text!r}") from None
+    if not (math.isfinite(low) and math.isfinite(high) and low < high):
+        raise InputError("clim", f"needs finite LOW < HIGH, got {text!r}")
+    return low, high
+
+
+def obstacle_surface(obstacle, extent: float) -> pv.PolyData:
+    """The obstacle's surface (its own :meth:`surface`) in its own frame, the
+    ground with texture coordinates for a checker of :func:`ground_cell`."""
+    vertices, triangles = obstacle.surface(extent)
+    faces = np.column_stack([np.full(len(triangles), 3), triangles]).ravel()
+    mesh = pv.PolyData(np.asarray(vertices, dtype=float), faces)
+    if obstacle.name == "ground":
+        mesh.active_texture_coordinates = vertices[:, :2] / (2.0 * ground_cell(extent))
+    elif obstacle.name != "box":  # a box's faces shade flat
+        mesh = mesh.compute_normals(auto_orient_normals=False, split_vertices=False)
+    return mesh
+
+
+def ground_cell(extent: float) -> float:
+    """Side (m) of one checker square on a ground drawn ``extent`` wide: a
+    round length giving about 12 squares across."""
+    return nice_ceiling(extent / 12.0)
+
+
+def checker_texture() -> pv.Texture:
+    """A 2x2 checker of :data:`GROUND_COLORS`, repeated over the ground."""
+    light, dark = (np.array(pv.Color(c).int_rgb, dtype=np.uint8) for c in GROUND_COLORS)
+    image = np.array([[light, dark], [dark, light]], dtype=np.uint8)
+    texture = pv.Texture(image)
+    texture.repeat = True
+    texture.interpolate = False
+    return texture
+
+
+def obstacle_matrix(obstacle, t: float) -> np.ndarray:
+    """4x4 matrix from the obstacle's frame to the world at time ``t``."""
+    matrix = np.eye(4)
+    matrix[:3, :3] = obstacle.axes
+    matrix[:3, 3] = obstacle.center_at(t)
+    return matrix
 
 
 def motion_bounds(sim: Simulation) -> tuple[float, ...]:
     """Box the cloth can reach while it swings from its pins: where it starts,
     that box mirrored through the pins (the far side of the swing), and both
-    moved down the gravity direction by the cloth's size."""
+    moved down the gravity direction by the cloth's size (a fixed camera
+    frames this)."""
     x = sim.model.rest_positions
     low, high = x.min(axis=0), x.max(axis=0)
     if sim.model.pinned.any() and np.any(sim.scene.gravity):
@@ -166,8 +350,25 @@ def motion_bounds(sim: Simulation) -> tuple[float, ...]:
     return (low[0], high[0], low[1], high[1], low[2], high[2])
 
 
+def plot_cloth(sim: Simulation, **kwargs):
+    """``sim.mesh.plot(**kwargs)`` in the cloth's colours and smooth shading,
+    unless ``scalars`` or ``color`` say otherwise; a field of the mesh gets a
+    scalar bar titled with its unit."""
+    scalars = kwargs.get("scalars")
+    if scalars is None:
+        kwargs.setdefault("color", CLOTH_COLOR)
+    elif isinstance(scalars, str) and scalars in FIELD_TITLES:
+        bar = dict(kwargs.get("scalar_bar_args") or {})
+        bar.setdefault("title", FIELD_TITLES[scalars])
+        bar.setdefault("fmt", "%.4g")  # stretch varies in the third decimal
+        kwargs["scalar_bar_args"] = bar
+    kwargs.setdefault("smooth_shading", True)
+    use_offscreen_gl_if_headless()
+    return sim.mesh.plot(**kwargs)
+
+
 class ClothView:
-    """Draws a simulation's cloth (and its pins) in a PyVista plotter.
+    """Draws a simulation's cloth, pins and obstacles in a PyVista plotter.
 
     Parameters
     ----------
@@ -175,21 +376,37 @@ class ClothView:
         The simulation to read from.
     plotter : pyvista.Plotter
         Where to draw.
+    color : str, optional
+        A field of :data:`FIELDS` to colour the cloth by, with a scalar bar;
+        ``None`` draws it in its front and back colours.
+    clim : (float, float), optional
+        Fixed colour range; by default it grows with the values seen
+        (:class:`ColorRange`).
+    cmap : str, optional
+        A matplotlib colour map name; each field has its own default.
+    reference : FollowingReference, optional
+        What the ``error`` field is measured against.
+    camera : {"scene", "fixed", "none"}
+        ``"scene"``: as ``sim.scene.camera`` says (a camera that follows the
+        cloth by default); ``"fixed"``: the scene's view direction on the
+        region the cloth can reach, not moving (the window, whose camera
+        the user turns); ``"none"``: left to the caller (``compare`` frames
+        several views with one camera).
+    label : bool
+        Write time, integrator and step in a corner.
     show_pins : bool
         Draw pinned points as small spheres.
-    own_grid : bool
-        Draw a grid of the view's own instead of ``sim.mesh`` (which
-        ``Simulation.advance`` refreshes): for the window, whose physics runs
-        on another thread while VTK, on the main one, reads the grid.
 
     Examples
     --------
     >>> import pyvista as pv, pvcloth
     >>> from pvcloth.visual.view import ClothView
-    >>> sim = pvcloth.Simulation(pvcloth.Scene())
-    >>> plotter = pv.Plotter(off_screen=True)
-    >>> view = ClothView(sim, plotter)
+    >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
+    >>> plotter = pv.Plotter(off_screen=True, window_size=(160, 120))
+    >>> view = ClothView(sim, plotter, color="stretch")
     >>> sim.advance(1 / 30); view.update()
+    >>> view.field, view.clim[0] < 1.0 < view.clim[1]
+    ('stretch', True)
     """
 
     def __init__(
@@ -197,22 +414,28 @@ class ClothView:
         sim: Simulation,
         plotter: pv.Plotter,
         *,
+        color: str | None = None,
+        clim=None,
+        cmap: str | None = None,
+        reference=None,
+        camera: str = "scene",
+        label: bool = False,
         show_pins: bool = True,
-        own_grid: bool = False,
     ):
         self.sim = sim
         self.plotter = plotter
-        self.own_grid = own_grid
-        # The simulation's own grid, point data and all, unless asked not to.
-        self.grid = cloth_mesh(sim) if own_grid else sim.mesh
+        self.field = check_field(color)
+        check_cmap(cmap)
+        if self.field == "error" and reference is None:
+            raise InputError("color", "the error field needs a reference run beside the cloth")
+        self.reference = reference
+        self.range = ColorRange(self.field, clim) if self.field else None
+        self.clim: tuple[float, float] | None = None
         plotter.set_background(BACK_COLOR, top="white")
-        self.actor = plotter.add_mesh(
-            self.grid,
-            color=CLOTH_COLOR,
-            smooth_shading=True,
-            specular=0.2,
-            name="cloth",
-        )
+        self._light(plotter)
+        self.surface = pv.PolyData(sim.state.x.copy(), grid_faces(sim.model.shape))
+        self._refresh_surface()
+        self.actor = self._add_cloth(cmap)
         self.pins = None
         if show_pins:
             self.pins = pv.PolyData(np.array(sim.positions[sim.pinned_indices]))
@@ -225,39 +448,162 @@ class ClothView:
                 render_points_as_spheres=True,
                 name="pins",
             )
-        self.obstacle_actors = []
-        extent = 3.0 * max(sim.scene.cloth.size)
-        for n, obstacle in enumerate(sim.model.obstacles):
+        self.obstacle_actors = self._add_obstacles()
+        self.text = None
+        if label:
+            # Sized to the frame (9 points at 480 rows), so it never covers a
+            # small picture.
+            height = plotter.window_size[1] / plotter.shape[0]
+            self.text = plotter.add_text(
+                "",
+                position=(0.015, 0.02),
+                viewport=True,
+                font_size=max(5, round(9 * height / 480)),
+                color="#222222",
+            )
+            self.text.GetTextProperty().SetBackgroundColor(1.0, 1.0, 1.0)
+            self.text.GetTextProperty().SetBackgroundOpacity(0.65)
+        self.framing = None
+        self._set_camera(camera)
+        self.update()
+
+    # -- building --------------------------------------------------------------
+
+    @staticmethod
+    def _light(plotter) -> None:
+        """A headlight and a soft light from above, with some ambient light
+        in the materials: a sheet facing the camera shows close to its own
+        colour (VTK's default light kit showed a vertical sheet at half of
+        it from the default camera) and folds still shade."""
+        renderer = plotter.renderer  # this view's panel only
+        renderer.remove_all_lights()
+        renderer.add_light(pv.Light(light_type="headlight", intensity=0.85))
+        # From straight above, wherever the camera is: a lying sheet is lit too.
+        renderer.add_light(
+            pv.Light(
+                position=(0.0, 0.0, 1.0),
+                focal_point=(0.0, 0.0, 0.0),
+                intensity=0.25,
+                positional=False,
+                light_type="scene light",
+            )
+        )
+
+    def _add_cloth(self, cmap):
+        # Gouraud: shaded with the grid's point normals (PyVista draws flat
+        # unless asked to smooth, which would recompute normals per frame).
+        material = dict(
+            ambient=0.25, diffuse=0.75, specular=0.1, specular_power=20.0, interpolation="gouraud"
+        )
+        if self.field is None:
+            actor = self.plotter.add_mesh(self.surface, color=CLOTH_COLOR, name="cloth", **material)
+            actor.backface_prop = pv.Property(color=CLOTH_BACK_COLOR, **material)
+            return actor
+        style = FIELDS[self.field]
+        actor = self.plotter.add_mesh(
+            self.surface,
+            scalars=self.field,
+            clim=self.clim,
+            cmap=cmap or style.cmap,
+            name="cloth",
+            scalar_bar_args={
+                "title": style.title,
+                "fmt": "%.4g",
+                "vertical": False,
+                "position_x": 0.52,
+                "position_y": 0.04,
+                "width": 0.45,
+                "height": 0.09,
+                "n_labels": 3,
+                "title_font_size": 12,
+                "label_font_size": 11,
+                "color": "#222222",
+            },
+            **material,
+        )
+        # A colour map colours both sides; the back is drawn darker.
+        actor.backface_prop = pv.Property(**{**material, "diffuse": 0.45, "ambient": 0.12})
+        return actor
+
+    def _add_obstacles(self) -> list:
+        actors = []
+        extent = 4.0 * max(self.sim.scene.cloth.size)
+        for n, obstacle in enumerate(self.sim.model.obstacles):
             ground = obstacle.name == "ground"
-            actor = plotter.add_mesh(
-                obstacle_mesh(obstacle, extent),
-                color=GROUND_COLOR if ground else OBSTACLE_COLOR,
-                smooth_shading=not ground,
+            actor = self.plotter.add_mesh(
+                obstacle_surface(obstacle, extent),
+                color=None if ground else OBSTACLE_COLOR,
+                texture=checker_texture() if ground else None,
+                smooth_shading=not ground and obstacle.name != "box",
+                # The floor lit mostly by ambient light: it reads as a light
+                # floor from any camera, not a dark slab at grazing light.
+                ambient=0.7 if ground else 0.25,
+                diffuse=0.35 if ground else 0.75,
                 specular=0.0 if ground else 0.3,
                 name=f"obstacle{n}",
             )
-            actor.user_matrix = obstacle_matrix(obstacle, sim.time)
-            self.obstacle_actors.append(actor)
-        self.reset_camera()
+            actor.user_matrix = obstacle_matrix(obstacle, self.sim.time)
+            actors.append(actor)
+        return actors
 
-    def reset_camera(self) -> None:
-        """Look at the region the cloth will move through, from the front and
-        a little above, z up."""
-        self.plotter.view_vector((0.9, -1.6, 0.8), viewup=(0, 0, 1))
+    def _set_camera(self, mode: str) -> None:
+        if mode == "none":
+            return
+        spec = self.sim.scene.camera
+        camera = self.plotter.camera
+        if spec.explicit:
+            camera.position, camera.focal_point = spec.position, spec.focal_point
+            camera.up = spec.up
+            self.plotter.renderer.ResetCameraClippingRange()
+            return
+        direction, up = VIEWS[spec.view]
+        if mode == "scene" and spec.follow:
+            width, height = self.plotter.window_size
+            self.framing = FramingCamera(direction, up, aspect=width / height)
+            return
+        self.plotter.view_vector(direction, viewup=up)
         self.plotter.reset_camera(bounds=motion_bounds(self.sim))
 
+    def reset_camera(self) -> None:
+        """Back to the starting camera (a following camera starts afresh)."""
+        if self.framing is not None:
+            self.framing.focal = None
+        self._set_camera("scene" if self.framing is not None else "fixed")
+
+    # -- every frame -----------------------------------------------------------
+
+    def _refresh_surface(self) -> None:
+        x = self.sim.state.x.copy()
+        self.surface.points = x
+        self.surface.point_data["Normals"] = grid_normals(x, self.sim.model.shape)
+        self.surface.point_data.active_normals_name = "Normals"
+        if self.field is not None:
+            values = point_fields(self.sim, [self.field], self.reference)[self.field]
+            self.surface.point_data[self.field] = values
+            self.clim = self.range.update(values)
+
     def update(self) -> None:
-        """Copy the simulation's current state into the drawn meshes."""
-        if self.own_grid:
-            update_cloth_mesh(self.grid, self.sim)
-        else:
-            self.sim.update_mesh()
-        for obstacle, actor in zip(self.sim.model.obstacles, self.obstacle_actors, strict=True):
+        """Copy the simulation's current state into the drawn meshes (and
+        move a following camera)."""
+        sim = self.sim
+        self._refresh_surface()
+        if self.field is not None:
+            self.actor.mapper.scalar_range = self.clim
+        for obstacle, actor in zip(sim.model.obstacles, self.obstacle_actors, strict=True):
             if obstacle.path.size:
-                actor.user_matrix = obstacle_matrix(obstacle, self.sim.time)
+                actor.user_matrix = obstacle_matrix(obstacle, sim.time)
         if self.pins is not None:
-            pins = self.sim.positions[self.sim.pinned_indices]
+            pins = sim.positions[sim.pinned_indices]
             if len(pins) == self.pins.n_points:
                 self.pins.points = pins
             else:  # pins were added or removed: rebuild the small point cloud
                 self.pins.copy_from(pv.PolyData(np.array(pins)))
+        if self.framing is not None:
+            position, focal, up = self.framing.frame(self.surface.points)
+            camera = self.plotter.camera
+            camera.position, camera.focal_point, camera.up = position, focal, up
+            self.plotter.renderer.ResetCameraClippingRange()
+        if self.text is not None:
+            self.text.SetInput(
+                f"t = {sim.time:5.2f} s   {sim.integrator.name}, dt = {sim.dt:.3g} s"
+            )

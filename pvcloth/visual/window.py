@@ -176,7 +176,7 @@ class ClothApp:
             title=f"pvcloth - {sim.scene.name}",
         )
         self.plotter.render_window.SetMultiSamples(0)  # before the window first draws
-        self.view = ClothView(sim, self.plotter, own_grid=True)
+        self.view = ClothView(sim, self.plotter, camera="fixed")
         self.style = ClothDragStyle(
             sim,
             on_grab=self._grab,
