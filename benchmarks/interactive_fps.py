@@ -17,7 +17,7 @@ the whole measurement, then let go.
 
 Run:  xvfb-run -a -s "-screen 0 1280x1024x24" python benchmarks/interactive_fps.py
       [--scene data/scenes/hanging.toml] [--sizes 32 64] [--seconds 6]
-      [--integrators ...] [--drag] [--out FILE]
+      [--integrators ...] [--drag] [--size 1024x768] [--out FILE]
       (writes benchmarks/results/interactive_fps.md)
 """
 
@@ -41,10 +41,10 @@ WARM_UP = 1.0  # wall seconds before measuring (compilation, first chunks)
 DRAG_RADIUS, DRAG_PERIOD = 80.0, 2.0  # pixels, wall seconds per turn
 
 
-def measure(scene, integrator: str, seconds: float, drag: bool = False) -> dict:
+def measure(scene, integrator: str, seconds: float, drag: bool = False, size=(1024, 768)) -> dict:
     sim = pvcloth.Simulation(scene, integrator=integrator, stability="substep")
     sim.set_step(None)  # what the window's "a" and "i" keys give
-    app = ClothApp(sim, window_size=(1024, 768))
+    app = ClothApp(sim, window_size=size)
     frames, chunks = [], []
     start = {}
     original = app.frame
@@ -107,20 +107,22 @@ def main() -> None:
         default=sorted(n for n, cls in pvcloth.INTEGRATORS.items() if cls.interactive),
     )
     parser.add_argument("--drag", action="store_true", help="drag a point all the while")
+    parser.add_argument("--size", default="1024x768", help="window WIDTHxHEIGHT")
     parser.add_argument("--out", type=Path, default=HERE / "results" / "interactive_fps.md")
     args = parser.parse_args()
     base = pvcloth.load_scene(args.scene)
+    size = tuple(int(v) for v in args.size.split("x"))
     rows = []
     for n in args.sizes:
         for integrator in args.integrators:
-            rows.append(measure(base.with_resolution(n), integrator, args.seconds, args.drag))
+            rows.append(measure(base.with_resolution(n), integrator, args.seconds, args.drag, size))
             print(rows[-1], flush=True)
     lines = [
         "# The interactive window, by the wall clock",
         "",
         '`xvfb-run -a -s "-screen 0 1280x1024x24" python benchmarks/interactive_fps.py'
         f"{''.join(' ' + a for a in sys.argv[1:])}`: "
-        f"the real window (1024x768, Xvfb, Mesa llvmpipe, its own 30 fps timer) on the "
+        f"the real window ({args.size}, Xvfb, Mesa llvmpipe, its own 30 fps timer) on the "
         f"{base.name} scene, {args.seconds:g} s measured after {WARM_UP:g} s of warm-up, each "
         "integrator at the step the window gives it. fps is frames drawn over wall "
         "seconds; the worst interval is the longest wait between two frames; real time "

@@ -33,6 +33,13 @@ def _add_overrides(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--integrator", help="the same as --set solver.integrator=NAME")
     parser.add_argument("--dt", type=float, help="the same as --set solver.dt=SECONDS")
     parser.add_argument(
+        "--tolerance",
+        type=float,
+        metavar="METRES",
+        help="the same as --set solver.tolerance=METRES: steps chosen for this error "
+        "(per simulated second; needs --integrator rk23)",
+    )
+    parser.add_argument(
         "--stability",
         choices=STABILITY_POLICIES,
         help="the same as --set solver.stability=...: a step above the stable one is refused, "
@@ -62,6 +69,7 @@ def _scene(args):
         ("solver.integrator", args.integrator),
         ("solver.dt", args.dt),
         ("solver.stability", args.stability),
+        ("solver.tolerance", args.tolerance),
         ("camera.view", args.view),
     ):
         if value is not None:
@@ -95,10 +103,16 @@ def cmd_simulate(args) -> None:
         check()
     wall = time.perf_counter() - start
     energy = sim.energy()
+    steps = f"{sim.dt:.3g} s"
+    if sim.controller is not None:
+        steps = (
+            f"adaptive length (tolerance {sim.controller.tolerance:g} m, last {sim.dt:.3g} s, "
+            f"{sim.controller.rejected} rejected)"
+        )
     z = sim.positions[:, 2]
     centre = sim.model.mass @ z / sim.model.mass.sum()
     print(
-        f"simulated {sim.time:.4g} s in {sim.steps} steps of {sim.dt:.3g} s "
+        f"simulated {sim.time:.4g} s in {sim.steps} steps of {steps} "
         f"({sim.integrator.name}) in {wall:.3g} s wall ({sim.time / wall:.3g} x real time)\n"
         f"lowest point z = {z.min():.4g} m, centre of mass z = {centre:.4g} m\n"
         f"energy: kinetic {energy['kinetic']:.4g} J, potential {energy['potential']:.4g} J"

@@ -64,6 +64,11 @@ def describe(sim: Simulation) -> str:
         )
     elif sim.dt_source == "substep":
         origin = f"substeps of the given {sim.requested_dt:.4g} s"
+    elif sim.dt_source == "adaptive":
+        origin = (
+            f"adaptive: chosen every step to keep the error under "
+            f"{sim.controller.tolerance:g} m per simulated second; this is the next step tried"
+        )
     else:
         origin = "as given"
     lines.append(
@@ -76,6 +81,8 @@ def describe(sim: Simulation) -> str:
         lines.append("stable dt   unlimited (stable at any step on the linearised cloth)")
     else:
         verdict = "ok" if sim.dt <= STABLE_SHARE * stable else "TOO LARGE: expect divergence"
+        if sim.controller is not None:
+            verdict = "the error estimate shortens a step that is too long"
         share = sim.dt / stable
         lines.append(
             f"stable dt   about {stable:.4g} s at rest (dt is {share:.2f} of it: {verdict})"

@@ -21,6 +21,7 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 
 RUNS = {
+    "adaptive.py": ([], "adaptive.md"),
     "view_cost.py": ([], "view_cost.md"),
     "blas_threads.py": ([], "blas_threads.md"),
     "cpu_speed.py": (["--sizes", "8", "--rounds", "1"], "cpu_speed.md"),

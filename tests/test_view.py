@@ -428,3 +428,70 @@ def test_compare_refuses_a_mismatched_step_list(tmp_path):
     )
     assert result.returncode == 2
     assert "dts: give one step or one per integrator (2), got 3" in result.stderr
+
+
+# -- reference pictures, one per feature ------------------------------------------
+
+
+def feature_picture(name: str, tmp_path) -> np.ndarray:
+    """A small picture of one feature, made through the public functions."""
+    from pvcloth.visual.compare import compare
+    from pvcloth.visual.movie import render
+
+    out = tmp_path / f"{name}.png"
+    small = pvcloth.ClothSpec(resolution=(16, 16), orientation="horizontal", center=(0, 0, 1.5))
+    if name == "stretch_on_a_ball":
+        scene = pvcloth.load_scene(SCENES / "drape_sphere.toml")
+        scene = scene.replace(cloth=dataclasses_replace(scene.cloth, resolution=(16, 16)))
+        render(
+            Simulation(scene),
+            out,
+            frames=20,
+            size=(200, 150),
+            color="stretch",
+            clim=(0.97, 1.03),
+            progress=False,
+        )
+    elif name == "side_view":
+        scene = pvcloth.load_scene(SCENES / "hanging.toml").replace(cloth=small)
+        scene = scene.with_overrides({"camera.view": "side"})
+        render(Simulation(scene, dt=5e-4), out, frames=10, size=(200, 150), progress=False)
+    elif name == "compare_two_panels":
+        scene = pvcloth.load_scene(SCENES / "hanging.toml").replace(cloth=small)
+        compare(
+            scene,
+            out,
+            ["symplectic_euler", "fast_mass_spring"],
+            dts=[5e-4, 1 / 60],
+            frames=8,
+            size=(320, 160),
+            progress=False,
+        )
+    return iio.imread(out)
+
+
+def dataclasses_replace(obj, **changes):
+    import dataclasses
+
+    return dataclasses.replace(obj, **changes)
+
+
+@pytest.mark.parametrize("name", ["stretch_on_a_ball", "side_view", "compare_two_panels"])
+def test_feature_pictures_match_their_references(name, tmp_path):
+    """Catches a broken colour map, back face, ground, camera or panel layout.
+    To accept a deliberate change of look:
+    PVCLOTH_UPDATE_REFERENCE=1 python -m pytest tests/test_view.py -k references."""
+    import os
+
+    from conftest import ROOT
+
+    image = feature_picture(name, tmp_path)
+    path = ROOT / "tests" / "reference" / f"{name}.png"
+    if os.environ.get("PVCLOTH_UPDATE_REFERENCE"):
+        iio.imwrite(path, image)
+    expected = iio.imread(path)
+    assert image.shape == expected.shape
+    difference = np.abs(image.astype(int) - expected.astype(int)).max(axis=-1)
+    # software GL differs by a few levels between builds; a change of look by many
+    assert difference.mean() < 1.5
+    assert (difference > 40).mean() < 0.01

@@ -58,6 +58,15 @@ def save_checkpoint(sim: Simulation, path: str | os.PathLike) -> Path:
         path = path.with_suffix(path.suffix + ".npz")
     path.parent.mkdir(parents=True, exist_ok=True)
     extra = {f"integrator_{k}": v for k, v in sim.integrator.get_state().items()}
+    if sim.controller is not None:  # an adaptive run resumes with its controller's memory
+        control = sim.controller
+        extra["controller"] = np.array(
+            [
+                -1.0 if control.previous is None else control.previous,
+                float(control._after_rejection),
+                float(control.rejected),
+            ]
+        )
     arrays = dict(
         tag=np.array(TAG),
         version=np.array(VERSION),
@@ -187,8 +196,15 @@ def _rebuild(data: dict, path: Path) -> Simulation:
             if values.ndim != 1 or values.size > 3 * n:  # one value per free coordinate
                 raise CheckpointError(f"{path}: {key!r} has shape {values.shape}")
             extra[key[len(prefix) :]] = values
+    controller = None
+    if "controller" in data:
+        values = _entry(data, "controller", path, "f", (3,))
+        if not np.isfinite(values).all() or values[2] < 0:
+            raise CheckpointError(f"{path}: 'controller' holds {values.tolist()}")
+        controller = values
     return Simulation.resumed(
         scene,
+        controller_state=controller,
         dt=float(dt),
         stiffness_scale=float(scale),
         backend=backend,

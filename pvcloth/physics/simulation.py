@@ -13,8 +13,9 @@ from typing import Any
 import numpy as np
 
 from pvcloth.errors import DivergenceError, InputError, SceneError
+from pvcloth.physics.adaptive import MAX_STEP, MIN_STEP, StepController
 from pvcloth.physics.blas import one_blas_thread
-from pvcloth.physics.integrators import get_integrator
+from pvcloth.physics.integrators import INTEGRATORS, get_integrator
 from pvcloth.physics.model import build_model
 from pvcloth.physics.state import Control, State
 from pvcloth.scene.spec import (
@@ -139,7 +140,11 @@ class Simulation:
         self.model = build_model(scene, backend)
         self.integrator = get_integrator(scene.solver.integrator, scene.solver.iterations)
         self.reset()
+        #: Chooses every step when the scene gives ``solver.tolerance``
+        #: (:mod:`pvcloth.physics.adaptive`); ``None`` for fixed steps.
+        self.controller: StepController | None = None
         self.dt = self._checked_step(scene.solver.dt, scene.solver.stability)
+        self._start_controller()
 
     @property
     def requested_dt(self) -> float | None:
@@ -151,13 +156,18 @@ class Simulation:
         """Where ``dt`` comes from: ``"auto"`` (at most half the stable step),
         ``"given"`` (the scene or an override) or ``"substep"`` (the given
         step split into equal substeps for stability)."""
+        if self.controller is not None:
+            return "adaptive"
         if self.requested_dt is None:
             return "auto"
         return "given" if self.dt == self.requested_dt else "substep"
 
     def _checked_step(self, dt: float | None, policy: str) -> float:
         """The step to take: automatic when ``dt`` is None, else ``dt`` checked
-        against the stable step as ``policy`` says."""
+        against the stable step as ``policy`` says (with a tolerance, ``dt`` is
+        only the first step the controller tries: not checked)."""
+        if self.scene.solver.tolerance is not None and dt is not None:
+            return min(dt, MAX_STEP)
         if dt is None:
             return self.automatic_dt()
         if policy == "ignore":
@@ -284,7 +294,16 @@ class Simulation:
     def summary(self) -> list[tuple[str, str]]:
         """``(topic, text)`` rows: scene, size, clock, integrator and step, pins."""
         nx, ny = self.resolution
-        origin = {"auto": "automatic", "given": "as given", "substep": "substep"}[self.dt_source]
+        origin = {
+            "auto": "automatic",
+            "given": "as given",
+            "substep": "substep",
+            "adaptive": "adaptive",
+        }[self.dt_source]
+        if self.controller is not None:
+            origin += (
+                f", tolerance {self.controller.tolerance:g} m, {self.controller.rejected} rejected"
+            )
         return [
             ("scene", self.scene.name),
             ("cloth", f"{nx} x {ny} points, backend {self.model.backend}"),
@@ -297,7 +316,9 @@ class Simulation:
         nx, ny = self.resolution
         return (
             f"<Simulation {self.scene.name!r}: {nx} x {ny} points, t = {self.time:.6g} s "
-            f"({self.steps} steps), {self.integrator.name} at dt = {self.dt:.4g} s>"
+            f"({self.steps} steps), {self.integrator.name} at "
+            + ("adaptive " if self.controller is not None else "")
+            + f"dt = {self.dt:.4g} s>"
         )
 
     def _repr_html_(self) -> str:
@@ -478,10 +499,16 @@ class Simulation:
         step_depends = ("springs", "air_damping", "solver")
         if any(getattr(scene, name) != getattr(self.scene, name) for name in step_depends):
             try:
-                self.dt = self._checked_step(scene.solver.dt, policy)
+                current, self.scene = self.scene, scene  # the step rule reads the new solver
+                try:
+                    self.dt = self._checked_step(scene.solver.dt, policy)
+                    self._start_controller()
+                finally:
+                    self.scene = current
             except BaseException:
                 self.model.apply(before[0])
-                self.integrator = before[1]
+                self.integrator, self.dt = before[1], before[2]
+                self._start_controller()
                 raise
         self.scene = scene
 
@@ -560,12 +587,14 @@ class Simulation:
         targets: np.ndarray,
         integrator_state: dict[str, np.ndarray],
         backend: str | None = None,
+        controller_state: np.ndarray | None = None,
     ) -> Simulation:
         """A simulation that continues a saved one exactly (what
         :func:`pvcloth.load_checkpoint` builds from checked entries): the
         scene as edited, the step that was being taken (not re-derived), the
-        state, the clock, the pins, the integrator's own state and the
-        backend (the two sum forces in different orders)."""
+        state, the clock, the pins, the integrator's own state, an adaptive
+        run's controller memory and the backend (the two sum forces in
+        different orders)."""
         sim = cls(scene, dt=dt, stability="ignore", backend=backend)
         sim.scene = scene  # the saved solver settings, not the override above
         sim.stiffness_scale = stiffness_scale
@@ -574,6 +603,11 @@ class Simulation:
         sim.control.targets[:] = targets
         sim.control.pinned = pinned
         sim.integrator.set_state(integrator_state)
+        if sim.controller is not None and controller_state is not None:
+            previous, after_rejection, rejected = (float(value) for value in controller_state)
+            sim.controller.previous = None if previous < 0 else previous
+            sim.controller._after_rejection = bool(after_rejection)
+            sim.controller.rejected = int(rejected)
         sim.update_mesh()
         return sim
 
@@ -596,6 +630,9 @@ class Simulation:
             run is refused before it starts).
         """
         seconds = real("seconds", seconds, minimum=0.0, error=InputError)
+        if self.controller is not None:
+            self._advance_adaptive(seconds)
+            return
         self.check_run_length(self.owed + seconds)
         self.owed += seconds
         n = math.floor(self.owed / self.dt + 1e-9)
@@ -684,8 +721,56 @@ class Simulation:
             return one_blas_thread()
         return contextlib.nullcontext()
 
-    def _substep(self, pinned: np.ndarray, pin_positions: np.ndarray) -> None:
-        dt = self.dt
+    def _start_controller(self) -> None:
+        """A step controller when the scene gives a tolerance (and an
+        integrator that measures its error), else none."""
+        tolerance = self.scene.solver.tolerance
+        if tolerance is None:
+            self.controller = None
+            return
+        if not self.integrator.embedded:
+            embedded = ", ".join(sorted(n for n, c in INTEGRATORS.items() if c.embedded))
+            raise SceneError(
+                "solver.tolerance",
+                f"{self.integrator.name} does not measure its own error, so no step can be "
+                f"chosen for a tolerance; use solver.integrator = {embedded!r} with it, or "
+                f"leave solver.tolerance out for fixed steps",
+            )
+        self.controller = StepController(tolerance, self.integrator.order, self.dt)
+
+    def _advance_adaptive(self, seconds: float) -> None:
+        """Steps chosen by the controller until exactly ``seconds`` later;
+        rejected ones are retried shorter and leave no trace."""
+        control = self.controller
+        end = self.state.t + seconds
+        pinned = self.control.pinned_index
+        start_time = self.state.t
+        start = self.state.x[pinned].copy()
+        goal = self.control.targets[pinned].copy()
+        try:
+            while self.state.t < end - 1e-12 * max(1.0, end):
+                if control.step < MIN_STEP:
+                    raise DivergenceError(
+                        f"simulation stopped at t = {self.state.t:.6g} s: {self.integrator.name}"
+                        f" needed steps under {MIN_STEP:g} s to keep its error under "
+                        f"{control.tolerance:g} m (a blow-up, or a tolerance too tight "
+                        f"for this cloth)"
+                    )
+                h = min(control.step, end - self.state.t)
+                if end - (self.state.t + h) < 1e-9 * h:  # no sliver of a step left over
+                    h = end - self.state.t
+                share = (self.state.t + h - start_time) / seconds
+                if self._substep(pinned, start + (goal - start) * share, dt=h):
+                    self.dt = control.step
+        finally:  # after a divergence too: the mesh shows the last good state
+            self.update_mesh()
+
+    def _substep(
+        self, pinned: np.ndarray, pin_positions: np.ndarray, dt: float | None = None
+    ) -> bool:
+        """One step of ``dt`` (default: the fixed step); with a controller,
+        ``False`` when its error estimate rejected it (nothing changed)."""
+        dt = self.dt if dt is None else dt
         state = self.state
         # Pinned points have zero inverse mass, so integrators move them at
         # their velocity: the one that lands them on their target.
@@ -696,7 +781,14 @@ class Simulation:
         spare = self._take_spare()
         with np.errstate(all="ignore"):
             new = self.integrator.step(model, state, self.control, dt, out=spare)
-            new.t = (self.steps + 1) * dt if self._uniform_clock(state) else state.t + dt
+            if self.controller is not None:
+                self.controller.step = dt
+                if not self.controller.judge(self.integrator.error):
+                    self._spare = spare
+                    return False
+                new.t = state.t + dt
+            else:
+                new.t = (self.steps + 1) * dt if self._uniform_clock(state) else state.t + dt
             if model.obstacles:
                 model.collide(state.x, new.x, new.v, self.control.movable_index, state.t, new.t)
         new.x[pinned] = pin_positions
@@ -713,6 +805,7 @@ class Simulation:
         self._spare = state
         self.state = new
         self.steps += 1
+        return True
 
     def _take_spare(self) -> State | None:
         """The state the last step replaced, for the next step to write over,

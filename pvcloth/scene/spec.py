@@ -216,6 +216,7 @@ INTEGRATOR_NAMES = (
     "explicit_euler",
     "fast_mass_spring",
     "implicit_euler",
+    "rk23",
     "rk4",
     "symplectic_euler",
     "verlet",
@@ -246,10 +247,18 @@ class SolverSpec:
         default 10): more are closer to backward Euler, and cost more. The
         other integrators leave it unused (``backward_euler`` iterates to its
         residual tolerance).
+    tolerance : float, optional
+        Error per step in metres (1e-12 to 1): the step is then chosen for
+        every step from the integrator's own error estimate, rejected and
+        retried when over it (:mod:`pvcloth.physics.adaptive`); ``dt``, if
+        given, is the first step tried, and ``stability`` is not used. Needs
+        an integrator that measures its error (``rk23``).
 
     Examples
     --------
     >>> from pvcloth import SolverSpec
+    >>> SolverSpec("rk23", tolerance=1e-5).tolerance
+    1e-05
     >>> SolverSpec("verlet").dt is None  # chosen from the stable step
     True
     >>> SolverSpec("rk4", dt=1e-4).dt
@@ -262,9 +271,12 @@ class SolverSpec:
     dt: float | None = None
     stability: str = "refuse"
     iterations: int | None = None
+    tolerance: float | None = None
 
     def __post_init__(self):
         _set(self, "stability", choice("stability", self.stability, STABILITY_POLICIES))
+        if self.tolerance is not None:
+            _set(self, "tolerance", real("tolerance", self.tolerance, minimum=1e-12, maximum=1.0))
         if self.iterations is not None:
             _set(
                 self, "iterations", integer("iterations", self.iterations, minimum=1, maximum=10000)

@@ -170,7 +170,7 @@ def compare(
             "dts", f"give one step or one per integrator ({len(integrators)}), got {len(dts)}"
         )
     panels = [
-        Panel(Simulation(scene, integrator=name, dt=dt))
+        Panel(Simulation(scene.with_overrides({"solver.integrator": name, "solver.dt": dt})))
         for name, dt in zip(integrators, dts, strict=True)
     ]
     for panel in panels:
@@ -223,8 +223,15 @@ def _draw_panels(plotter, panels: list[Panel], reference, color):
         views.append(view)
         plotter.subplot(0, k)
         plotter.set_background("white", all_renderers=False)
+        band = plotter.window_size[1] / (LABEL_ROWS + 1)  # pixels of the label band
         labels.append(
-            plotter.add_text("", position=(0.03, 0.9), viewport=True, font_size=8, color="#222222")
+            plotter.add_text(
+                "",
+                position=(0.03, 0.92),
+                viewport=True,
+                font_size=max(4, round(band / 11)),  # four lines fill the band
+                color="#222222",
+            )
         )
         labels[-1].GetTextProperty().SetVerticalJustificationToTop()
     plotter.link_views([columns + k for k in range(columns)])  # the cloth row

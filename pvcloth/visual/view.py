@@ -500,6 +500,8 @@ class ClothView:
             actor.backface_prop = pv.Property(color=CLOTH_BACK_COLOR, **material)
             return actor
         style = FIELDS[self.field]
+        rows = self.plotter.window_size[1] / self.plotter.shape[0]
+        text = max(5, round(12 * rows / 480))  # points: readable, never larger than the frame
         actor = self.plotter.add_mesh(
             self.surface,
             scalars=self.field,
@@ -515,8 +517,8 @@ class ClothView:
                 "width": 0.45,
                 "height": 0.09,
                 "n_labels": 3,
-                "title_font_size": 12,
-                "label_font_size": 11,
+                "title_font_size": text,
+                "label_font_size": text - 1,
                 "color": "#222222",
             },
             **material,

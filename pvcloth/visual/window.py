@@ -166,7 +166,7 @@ class ClothApp:
         self.frame_times: collections.deque[float] = collections.deque(maxlen=31)
         self._requests = []  # Futures of requests not yet looked at
         self._hovered = None
-        self._last_draw = 0.0
+        self._next_frame = 0.0  # perf_counter time the next frame is due
         self.physics = PhysicsThread(sim, chunk_seconds=physics_share / fps)
         # No multisampling: under software GL (llvmpipe) 4x MSAA triples the
         # cost of a frame (benchmarks/results/interactive_fps.md).
@@ -530,8 +530,13 @@ class ClothApp:
         cloth barely moved in a real window). Sleeping releases the GIL, and
         the loop still handles the mouse and keys between ticks."""
         now = time.perf_counter()
-        if now - self._last_draw >= 1.0 / self.fps - 0.5e-3 * TICK_MS:
-            self._last_draw = now
+        if now >= self._next_frame - 0.5e-3 * TICK_MS:
+            # Due times on a fixed grid of 1/fps, not "1/fps after the last
+            # frame": a tick that comes late does not delay every later
+            # frame (that cost 10 % of the frame rate: 27 fps for 30). A
+            # window that fell a frame behind starts the grid again.
+            period = 1.0 / self.fps
+            self._next_frame = max(self._next_frame + period, now - 0.5 * period)
             self.frame()
             self._frames_left -= 1
             if self._frames_left <= 0:

@@ -10,6 +10,7 @@ from pvcloth.physics.integrators import (  # noqa: F401  (importing registers th
     fast_mass_spring,
     implicit_euler,
     rk4,
+    rk23,
     symplectic_euler,
     verlet,
 )

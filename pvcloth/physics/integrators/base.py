@@ -57,6 +57,10 @@ class Integrator(ABC):
         The integrator this one approximates and whose answer it would give
         solved exactly (``"backward_euler"`` for the implicit ones), which
         studies measure its solver error against; ``None`` if exact.
+    embedded : bool
+        Whether each step measures its own error (an embedded pair, whose
+        estimate it leaves in ``error``, metres): only these take
+        ``solver.tolerance``.
     uses_blas : bool
         Whether its step calls BLAS (linear solves, long dot products): the
         simulation then holds BLAS to one thread around it
@@ -71,6 +75,7 @@ class Integrator(ABC):
     converges_to: str | None = None
     interactive: bool = True
     uses_blas: bool = False
+    embedded: bool = False
     _forces: np.ndarray | None = None  # reused (N, 3) force buffer, newtons
 
     def forces(self, model: Model, state: State) -> np.ndarray:

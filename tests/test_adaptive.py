@@ -1,0 +1,174 @@
+"""The user sets the error: steps chosen from rk23's own estimate.
+
+References are independent: RK4 at a tiny fixed step, and for the pair
+itself SciPy's ``solve_ivp`` on a one-point problem.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import pvcloth
+from conftest import SCENES
+from pvcloth import Simulation
+from pvcloth.physics.adaptive import MAX_STEP
+
+
+def hanging(n=16):
+    scene = pvcloth.load_scene(SCENES / "hanging.toml").with_resolution(n)
+    return scene.with_overrides({"solver.dt": None})
+
+
+def adaptive(scene, tolerance, **changes):
+    return Simulation(
+        scene.with_overrides(
+            {"solver.integrator": "rk23", "solver.tolerance": tolerance, **changes}
+        )
+    )
+
+
+@pytest.fixture(scope="module")
+def reference_16():
+    """RK4 at 25 us: far below every error measured here (its own, against a
+    step of half that, is under 1e-11 m)."""
+    sim = Simulation(hanging(), integrator="rk4", dt=0.5 / 20000, stability="ignore")
+    sim.advance(0.5)
+    return sim.positions.copy()
+
+
+def largest_distance(a, b) -> float:
+    return float(np.linalg.norm(a - b, axis=1).max())
+
+
+def test_the_error_follows_the_tolerance_over_four_decades(reference_16):
+    """The stated relation: after t seconds the error is at most about
+    tolerance * t / 1 s (each step spends its share of the tolerance), and
+    shrinks with it. Asserted: between a tenth of that and that, for
+    tolerances 1e-3 to 1e-6 m, and smaller at every tighter tolerance."""
+    t = 0.5
+    errors = []
+    for tolerance in (1e-3, 1e-4, 1e-5, 1e-6):
+        sim = adaptive(hanging(), tolerance)
+        sim.advance(t)
+        assert sim.time == pytest.approx(t, abs=1e-12)  # lands on the end exactly
+        error = largest_distance(sim.positions, reference_16)
+        assert 0.1 * tolerance * t < error < tolerance * t, (tolerance, error)
+        errors.append(error)
+    assert all(later < earlier for earlier, later in zip(errors, errors[1:], strict=False))
+
+
+def test_the_pair_matches_scipy_on_one_damped_point():
+    """One free point on one spring to a pin, with gravity and damping: the
+    simulation's adaptive run against SciPy's own adaptive RK45 at a tight
+    tolerance, to within the tolerance asked for."""
+    scene = pvcloth.Scene(
+        cloth=pvcloth.ClothSpec(resolution=(2, 2), size=(0.5, 0.5), orientation="horizontal"),
+        springs=pvcloth.SpringsSpec(
+            structural=pvcloth.SpringSpec(50.0, 0.2), shear=None, bending=None
+        ),
+        pins=pvcloth.PinSpec(corners=("top-left", "top-right", "bottom-left")),
+        air_damping=0.3,
+    )
+    sim = adaptive(scene, 1e-6)
+    model = sim.model
+    (k,) = np.flatnonzero(~model.pinned)  # the one free point
+
+    def rate(_, y):
+        x, v = y[:3], y[3:]
+        positions = model.rest_positions.copy()
+        velocities = np.zeros_like(positions)
+        positions[k], velocities[k] = x, v
+        force = model.compute_forces(positions, velocities)[k]
+        return np.concatenate([v, force / model.mass[k]])
+
+    y0 = np.concatenate([model.rest_positions[k], np.zeros(3)])
+    exact = solve_ivp(rate, (0.0, 1.0), y0, rtol=1e-11, atol=1e-12).y[:3, -1]
+    sim.advance(1.0)
+    assert np.linalg.norm(sim.positions[k] - exact) < 1e-6
+    assert sim.steps > 10 and sim.dt <= MAX_STEP
+
+
+def test_a_loose_tolerance_is_held_by_stability_not_blown_up(reference_16):
+    sim = adaptive(hanging(), 1e-1)
+    sim.advance(0.5)  # the estimate sees the instability and shortens the step
+    assert largest_distance(sim.positions, reference_16) < 0.1 * 0.5
+
+
+def test_contact_does_not_leave_the_controller_at_tiny_steps():
+    """A cloth dropped on the ground: the steps shorten at impact and grow
+    back once it lies still (measured: the median step of the last third
+    against the one at impact)."""
+    scene = pvcloth.load_scene(SCENES / "ground.toml").with_resolution(12)
+    sim = adaptive(scene.with_overrides({"solver.dt": None}), 1e-3)
+    steps = []
+    for _ in sim.frames(60, 30.0):
+        steps.append(sim.dt)
+    steps = np.array(steps[1:])
+    assert np.median(steps[-20:]) > 2 * steps.min()
+    assert sim.controller.rejected < 0.2 * sim.steps
+
+
+def test_moving_pins_and_wind_run_with_adaptive_steps():
+    sim = adaptive(pvcloth.load_scene(SCENES / "flag.toml").with_resolution(12), 1e-3)
+    for _ in sim.frames(10, 30.0):
+        pass
+    assert np.isfinite(sim.positions).all() and sim.time == pytest.approx(0.3)
+
+
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        ({"solver.tolerance": 0.0}, "solver.tolerance: must be at least 1e-12, got 0.0"),
+        ({"solver.tolerance": "tight"}, "solver.tolerance: expected a number"),
+        (
+            {"solver.tolerance": 1e-4, "solver.integrator": "verlet"},
+            "solver.tolerance: verlet does not measure its own error",
+        ),
+    ],
+)
+def test_bad_tolerances_are_named(changes, message):
+    with pytest.raises(pvcloth.SceneError, match=message.replace("(", r"\(")):
+        Simulation(hanging(8).with_overrides(changes))
+
+
+def test_info_and_the_command_line_say_the_step_is_adaptive(tmp_path):
+    import subprocess
+    import sys
+
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pvcloth",
+            "simulate",
+            str(SCENES / "hanging.toml"),
+            "--integrator",
+            "rk23",
+            "--tolerance",
+            "1e-4",
+            "--seconds",
+            "0.2",
+            "--quiet",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=tmp_path,
+    )
+    assert result.returncode == 0, result.stderr
+    assert "adaptive" in result.stdout
+    sim = adaptive(hanging(8), 1e-4)
+    assert sim.dt_source == "adaptive" and "adaptive" in repr(sim)
+
+
+def test_an_adaptive_run_resumes_bit_for_bit(tmp_path):
+    sim = adaptive(hanging(8), 1e-4)
+    sim.advance(0.2)
+    pvcloth.save_checkpoint(sim, tmp_path / "run.npz")
+    resumed = pvcloth.load_checkpoint(tmp_path / "run.npz")
+    sim.advance(0.3)
+    resumed.advance(0.3)
+    assert np.array_equal(sim.positions, resumed.positions)
+    assert resumed.steps == sim.steps and resumed.dt == sim.dt
