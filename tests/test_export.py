@@ -197,3 +197,23 @@ def test_export_command(tmp_path, capsys):
         == 0
     )
     assert out.is_file() and "wrote 3 frames" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("suffix", [".pvd", ".xdmf"])
+def test_exports_carry_the_fields_paraview_colours_by(tmp_path, suffix):
+    """The same point data as sim.mesh, frame by frame, with the mesh's values."""
+    import meshio
+
+    sim = Simulation(small_scene(6))
+    out = pvcloth.export(sim, tmp_path / f"run{suffix}", frames=3, fps=10, progress=False)
+    names = {"velocity", "speed", "stretch", "force", "energy", "pinned"}
+    if suffix == ".pvd":
+        last = meshio.read(sorted((tmp_path / "run_vtu").glob("*.vtu"))[-1])
+        data = last.point_data
+    else:
+        with meshio.xdmf.TimeSeriesReader(out) as reader:
+            reader.read_points_cells()
+            *_, (_, data, _) = (reader.read_data(k) for k in range(reader.num_steps))
+    assert names <= set(data)
+    np.testing.assert_allclose(data["stretch"], sim.mesh.point_data["stretch"], rtol=1e-12)
+    np.testing.assert_allclose(data["energy"], sim.mesh.point_data["energy"], rtol=1e-12)

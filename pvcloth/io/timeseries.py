@@ -5,10 +5,14 @@ Formats, by extension:
 ``.pvd``
     one VTU file per frame in ``OUT_vtu/`` plus a ParaView Data index with
     each frame's simulated time; ParaView plays it as a moving cloth.
+
+VTU and XDMF frames carry the point data of ``Simulation.mesh``
+(:data:`pvcloth.physics.fields.MESH_FIELDS`: velocity m/s, speed m/s,
+stretch, force N, energy J/m^2, pinned), so ParaView colours by any of them.
 ``.xdmf``
     an XDMF time series (with its HDF5 file). meshio writes the geometry
-    once, so each frame stores ``displacement`` (from the rest positions) and
-    ``velocity`` as point data: in ParaView apply *Warp By Vector* with
+    once, so each frame stores ``displacement`` (from the rest positions) as
+    point data besides the fields: in ParaView apply *Warp By Vector* with
     ``displacement`` to see the cloth move.
 ``.obj``
     one OBJ file per frame in ``OUT_obj/`` for Blender, with texture
@@ -40,6 +44,7 @@ import numpy as np
 
 from pvcloth.errors import ExportInterrupted, InputError
 from pvcloth.io.files import remove_orphaned_temporaries
+from pvcloth.physics.fields import MESH_FIELDS, point_fields
 from pvcloth.progress import frame_bar
 from pvcloth.signals import deferred
 
@@ -190,7 +195,7 @@ def export(
                             sim.time,
                             point_data={
                                 "displacement": sim.positions - rest,
-                                "velocity": np.array(sim.velocities),
+                                **_fields(sim),
                             },
                         )
                         done += 1
@@ -207,7 +212,7 @@ def export(
                     mesh = meshio.Mesh(
                         np.array(sim.positions),
                         cells,
-                        point_data={"velocity": np.array(sim.velocities)},
+                        point_data=_fields(sim),
                     )
                     meshio.write(staging / folder / name, mesh)
                     entries.append((sim.time, f"{folder}/{name}"))
@@ -225,6 +230,14 @@ def export(
     finally:
         with deferred(then_raise=False):  # once begun, moving into place must finish
             _finish(staging, path, suffix, folder, entries, done)
+
+
+def _fields(sim) -> dict[str, np.ndarray]:
+    """The point data every exported frame carries, as ``sim.mesh`` does
+    (``pinned`` as 0/1 floats: XDMF's writer takes numbers)."""
+    fields = point_fields(sim, MESH_FIELDS)
+    fields["pinned"] = fields["pinned"].astype(float)
+    return fields
 
 
 def _finish(staging: Path, path: Path, suffix: str, folder: str, entries, done: int) -> None:

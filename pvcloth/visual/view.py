@@ -26,8 +26,7 @@ import numpy as np
 import pyvista as pv
 
 from pvcloth.errors import InputError
-from pvcloth.physics.fields import spring_fields
-from pvcloth.physics.grid import point_stretch
+from pvcloth.physics.fields import MESH_FIELDS, point_fields
 from pvcloth.visual.camera import VIEWS, FramingCamera
 
 if TYPE_CHECKING:  # for annotations only
@@ -101,41 +100,7 @@ def check_cmap(name: str | None) -> str | None:
     return name
 
 
-def point_fields(sim: Simulation, names, reference=None) -> dict[str, np.ndarray]:
-    """The fields ``names`` of the simulation's current state, per point.
-
-    ``velocity`` (N, 3) m/s, ``speed`` m/s, ``stretch`` (length over rest
-    length), ``force`` N and ``energy`` J/m^2 (:mod:`pvcloth.physics.fields`),
-    ``pinned`` (1 or 0), and ``error`` m, the distance from ``reference``
-    (a :class:`~pvcloth.studies.runs.FollowingReference`) at the same time.
-    """
-    state = sim.state  # one state throughout, should a physics thread replace it
-    x = state.x.copy()
-    fields: dict[str, np.ndarray] = {}
-    for name in names:
-        if name == "velocity":
-            fields[name] = state.v.copy()
-        elif name == "speed":
-            fields[name] = np.linalg.norm(state.v, axis=1)
-        elif name == "stretch":
-            fields[name] = point_stretch(x, sim.model.rest_positions, sim.model.shape)
-        elif name in ("force", "energy"):
-            if "force" not in fields:
-                fields.update(spring_fields(sim.model, x))
-        elif name == "pinned":
-            fields[name] = sim.control.pinned.astype(np.uint8)
-        elif name == "error":
-            if reference is None:
-                raise InputError("color", "the error field needs a reference run beside the cloth")
-            fields[name] = reference.error(sim)
-        else:
-            raise InputError("field", f"{name!r} is not a field of the cloth")
-    return {name: fields[name] for name in names}
-
-
-#: Point data of ``Simulation.mesh`` (``error`` is added where a view has a
-#: reference), with scalar-bar titles.
-MESH_FIELDS = ("velocity", "speed", "stretch", "force", "energy", "pinned")
+#: Scalar-bar titles of the point data on ``Simulation.mesh``.
 FIELD_TITLES = {
     "velocity": "velocity (m/s)",
     "pinned": "pinned (1 = yes)",
