@@ -491,6 +491,11 @@ def test_feature_pictures_match_their_references(name, tmp_path):
         iio.imwrite(path, image)
     expected = iio.imread(path)
     assert image.shape == expected.shape
+    if name == "compare_two_panels":
+        # The label band shows measured wall times, which differ run to run
+        # (the command's test checks the labels): compare the cloth panels.
+        band = image.shape[0] // 4
+        image, expected = image[band:], expected[band:]
     difference = np.abs(image.astype(int) - expected.astype(int)).max(axis=-1)
     # software GL differs by a few levels between builds; a change of look by many
     assert difference.mean() < 1.5
