@@ -756,11 +756,17 @@ class Simulation:
                         f"{control.tolerance:g} m (a blow-up, or a tolerance too tight "
                         f"for this cloth)"
                     )
-                h = min(control.step, end - self.state.t)
+                natural = control.step
+                h = min(natural, end - self.state.t)
                 if end - (self.state.t + h) < 1e-9 * h:  # no sliver of a step left over
                     h = end - self.state.t
                 share = (self.state.t + h - start_time) / seconds
                 if self._substep(pinned, start + (goal - start) * share, dt=h):
+                    if h < natural:
+                        # Cut short to land on the end, not for its error:
+                        # the next advance starts from the step the controller
+                        # wanted (else every frame's end restarted it small).
+                        control.step = max(control.step, natural)
                     self.dt = control.step
         finally:  # after a divergence too: the mesh shows the last good state
             self.update_mesh()
