@@ -78,6 +78,13 @@ class Integrator(ABC):
     embedded: bool = False
     _forces: np.ndarray | None = None  # reused (N, 3) force buffer, newtons
 
+    @staticmethod
+    def acceleration(model: Model, control: Control, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Acceleration (m/s^2, shape (N, 3)) at positions ``x`` (m) and
+        velocities ``v`` (m/s): force over mass, zero for pinned points. The
+        stages of the Runge-Kutta methods evaluate this."""
+        return control.inv_mass[:, None] * model.compute_forces(x, v)
+
     def forces(self, model: Model, state: State) -> np.ndarray:
         """The total force at ``state``, in a buffer this integrator reuses
         from step to step (valid until its next call)."""

@@ -51,10 +51,8 @@ class BogackiShampine(Integrator):
     def step(
         self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
-        inv_mass = control.inv_mass[:, None]
-
         def acceleration(x, v):
-            return inv_mass * model.compute_forces(x, v)
+            return self.acceleration(model, control, x, v)
 
         x0, v0 = state.x, state.v
         a1 = acceleration(x0, v0)
