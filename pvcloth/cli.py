@@ -105,9 +105,11 @@ def cmd_simulate(args) -> None:
     energy = sim.energy()
     steps = f"{sim.dt:.3g} s"
     if sim.controller is not None:
+        stats = sim.stats
         steps = (
-            f"adaptive length (tolerance {sim.controller.tolerance:g} m, last {sim.dt:.3g} s, "
-            f"{sim.controller.rejected} rejected)"
+            f"adaptive length (tolerance {sim.controller.tolerance:g} m: {stats['shortest']:.3g}"
+            f" to {stats['longest']:.3g} s, mean {stats['mean']:.3g} s, last {stats['last']:.3g}"
+            f" s; {stats['rejected']} rejected and retried)"
         )
     z = sim.positions[:, 2]
     centre = sim.model.mass @ z / sim.model.mass.sum()

@@ -65,9 +65,11 @@ def describe(sim: Simulation) -> str:
     elif sim.dt_source == "substep":
         origin = f"substeps of the given {sim.requested_dt:.4g} s"
     elif sim.dt_source == "adaptive":
+        control = sim.controller
         origin = (
-            f"adaptive: chosen every step to keep the error under "
-            f"{sim.controller.tolerance:g} m per simulated second; this is the next step tried"
+            f"adaptive: chosen every step to keep the error under {control.tolerance:g} m per "
+            f"simulated second, between {control.min_step:.3g} and {control.max_step:.3g} s; "
+            f"this is the next step tried"
         )
     else:
         origin = "as given"
@@ -75,6 +77,8 @@ def describe(sim: Simulation) -> str:
         f"integrator  {sim.integrator.name} (order {sim.integrator.order}: "
         f"{sim.integrator.description}), dt = {sim.dt:.4g} s ({origin})"
     )
+    if sim.choice is not None:
+        lines.append(f"chosen by   solver.integrator = 'auto': {sim.choice.reason}")
     if stable == 0.0:
         lines.append("stable dt   none: the stiffest mode is undamped and grows at any step")
     elif math.isinf(stable):
@@ -82,7 +86,7 @@ def describe(sim: Simulation) -> str:
     else:
         verdict = "ok" if sim.dt <= STABLE_SHARE * stable else "TOO LARGE: expect divergence"
         if sim.controller is not None:
-            verdict = "the error estimate shortens a step that is too long"
+            verdict = f"adaptive steps are held under {STABLE_SHARE:g} of it"
         share = sim.dt / stable
         lines.append(
             f"stable dt   about {stable:.4g} s at rest (dt is {share:.2f} of it: {verdict})"

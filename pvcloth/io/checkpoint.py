@@ -65,6 +65,9 @@ def save_checkpoint(sim: Simulation, path: str | os.PathLike) -> Path:
                 -1.0 if control.previous is None else control.previous,
                 float(control._after_rejection),
                 float(control.rejected),
+                control.taken,
+                control.min_step,
+                control.max_step,
             ]
         )
     arrays = dict(
@@ -198,8 +201,8 @@ def _rebuild(data: dict, path: Path) -> Simulation:
             extra[key[len(prefix) :]] = values
     controller = None
     if "controller" in data:
-        values = _entry(data, "controller", path, "f", (3,))
-        if not np.isfinite(values).all() or values[2] < 0:
+        values = _entry(data, "controller", path, "f")
+        if values.shape not in ((3,), (6,)) or values[2] < 0:  # 3: saved before the bounds
             raise CheckpointError(f"{path}: 'controller' holds {values.tolist()}")
         controller = values
     return Simulation.resumed(

@@ -46,12 +46,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from pvcloth.scene.spec import DEFAULT_MAX_DT, DEFAULT_MIN_DT
+
 #: Safety factor on every new step (the estimate is an estimate).
 SAFETY = 0.9
 #: Largest and smallest factor between one step and the next.
 GROW, SHRINK = 5.0, 0.2
-#: Bounds of the step in seconds.
-MIN_STEP, MAX_STEP = 1e-9, 0.05
+#: Default bounds of the step in seconds (``solver.min_dt`` and ``max_dt`` change them).
+MIN_STEP, MAX_STEP = DEFAULT_MIN_DT, DEFAULT_MAX_DT
 #: The time (s) over which the errors of the steps may add up to the tolerance.
 UNIT_TIME = 1.0
 
@@ -69,6 +71,11 @@ class StepController:
         so the estimate, scale as ``h^(order + 1)``.
     step : float
         The next step to try (s).
+    min_step, max_step : float
+        Bounds of the step (s; ``solver.min_dt`` and ``solver.max_dt``, by
+        default :data:`MIN_STEP` and :data:`MAX_STEP`). The simulation lowers
+        ``max_step`` to 0.8 of an explicit method's estimated stable step: a
+        longer step is rejected by its error anyway.
 
     Attributes
     ----------
@@ -76,6 +83,11 @@ class StepController:
         Error over tolerance of the last accepted step (the P part's memory).
     rejected : int
         Steps rejected so far.
+    taken : float
+        Length of the last accepted step (s; 0 before the first).
+    shortest, longest : float
+        Shortest and longest accepted step (s) since the controller started
+        (a resumed run's since its resume; ``inf`` and 0 before the first).
 
     Examples
     --------
@@ -98,8 +110,13 @@ class StepController:
     tolerance: float
     order: int
     step: float
+    min_step: float = MIN_STEP
+    max_step: float = MAX_STEP
     previous: float | None = None
     rejected: int = 0
+    taken: float = 0.0
+    shortest: float = math.inf
+    longest: float = 0.0
     _after_rejection: bool = False
 
     def judge(self, error: float) -> bool:
@@ -119,10 +136,41 @@ class StepController:
             if self._after_rejection:
                 factor = min(factor, 1.0)
             self.previous, self._after_rejection = ratio, False
-            self.step = min(MAX_STEP, self.step * factor)
+            self.taken = self.step
+            self.shortest, self.longest = min(self.shortest, self.step), max(self.longest, self.step)
+            self.step = min(self.max_step, self.step * factor)
             return True
         factor = SHRINK if not math.isfinite(ratio) else max(SHRINK, SAFETY * ratio ** (-1.0 / k))
         self.step *= factor
         self.rejected += 1
         self._after_rejection = True
         return False
+
+
+#: A step that factorises (``Integrator.steady_steps``) is lengthened only
+#: when the controller would make it at least this many times longer.
+STEADY_GAIN = 1.25
+
+
+def steady_step(wanted: float, last: float, remaining: float) -> float:
+    """The step a method that factorises takes (s): the last one again
+    while the controller wants between :data:`SAFETY` and
+    :data:`STEADY_GAIN` times it (the safety factor is margin a repeated
+    step may use; a step over its error is still rejected), else the one
+    wanted; then shortened to divide ``remaining`` (the time left of the
+    advance) into whole steps, so every frame of a run takes the same steps
+    and reuses their factorisation.
+
+    Examples
+    --------
+    >>> from pvcloth.physics.adaptive import steady_step
+    >>> steady_step(wanted=0.011, last=0.01, remaining=0.05)  # 10 % longer: not worth a new factor
+    0.01
+    >>> round(steady_step(wanted=0.02, last=0.01, remaining=0.05), 6)  # 3 steps of 1/60 s
+    0.016667
+    """
+    step = last if SAFETY * last <= wanted <= STEADY_GAIN * last else wanted
+    whole = remaining / math.ceil(remaining / step * (1.0 - 1e-12))
+    # The time left is a difference of clock readings: the same step again
+    # comes out a few ulps off, and any change of the step refactorises.
+    return last if abs(whole - last) <= 1e-9 * last else whole

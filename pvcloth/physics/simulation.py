@@ -13,12 +13,20 @@ from typing import Any
 import numpy as np
 
 from pvcloth.errors import DivergenceError, InputError, SceneError
-from pvcloth.physics.adaptive import MAX_STEP, MIN_STEP, StepController
+from pvcloth.physics.adaptive import (
+    MAX_STEP,
+    MIN_STEP,
+    UNIT_TIME,
+    StepController,
+    steady_step,
+)
+from pvcloth.physics.auto import Choice, choose_integrator
 from pvcloth.physics.blas import one_blas_thread
 from pvcloth.physics.integrators import INTEGRATORS, get_integrator
 from pvcloth.physics.model import build_model
 from pvcloth.physics.state import Control, State
 from pvcloth.scene.spec import (
+    AUTO,
     MAX_LENGTH,
     STABILITY_POLICIES,
     Scene,
@@ -129,6 +137,11 @@ class Simulation:
         # The overrides become part of the scene: sim.scene is what runs.
         given = {"solver.integrator": integrator, "solver.dt": dt, "solver.stability": stability}
         scene = scene.with_overrides({k: v for k, v in given.items() if v is not None})
+        #: How ``solver.integrator = "auto"`` chose (``None`` if the scene named one).
+        self.choice: Choice | None = None
+        if scene.solver.integrator == AUTO:
+            self.choice = choose_integrator(scene)
+            scene = scene.with_overrides({"solver.integrator": self.choice.name})
         #: The scene being simulated, live edits (:meth:`update`) included:
         #: its ``solver.dt`` is the step asked for (``None``: automatic),
         #: ``dt`` the step taken (a substep of it, perhaps).
@@ -167,7 +180,7 @@ class Simulation:
         against the stable step as ``policy`` says (with a tolerance, ``dt`` is
         only the first step the controller tries: not checked)."""
         if self.scene.solver.tolerance is not None and dt is not None:
-            return min(dt, MAX_STEP)
+            return min(dt, self.scene.solver.max_dt or MAX_STEP)
         if dt is None:
             return self.automatic_dt()
         if policy == "ignore":
@@ -358,6 +371,45 @@ class Simulation:
         potential = self.model.potential_energy(self.state.x)
         return {"kinetic": kinetic, "potential": potential, "total": kinetic + potential}
 
+    @property
+    def last_step(self) -> float:
+        """The step last taken (s): ``dt``, or an adaptive run's last
+        accepted step (``dt`` is then the next one it will try)."""
+        if self.controller is not None and self.controller.taken > 0.0:
+            return self.controller.taken
+        return self.dt
+
+    @property
+    def stats(self) -> dict[str, float | int]:
+        """What the steps have been: ``steps`` taken, and for an adaptive
+        run also ``rejected``, the ``shortest``, ``longest`` and ``last``
+        accepted steps (s) and the ``mean`` step, simulated time over steps
+        (all since the run began, a resumed run's since its resume except
+        ``steps`` and ``rejected``).
+
+        Examples
+        --------
+        >>> import pvcloth
+        >>> scene = pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8)))
+        >>> sim = pvcloth.Simulation(scene.with_overrides({"solver.integrator": "rk23",
+        ...                                                "solver.tolerance": 1e-4}))
+        >>> sim.advance(0.1)
+        >>> stats = sim.stats
+        >>> stats["shortest"] <= stats["mean"] <= stats["longest"], stats["rejected"] >= 0
+        (True, True)
+        """
+        stats: dict[str, float | int] = {"steps": self.steps}
+        control = self.controller
+        if control is not None:
+            stats.update(
+                rejected=control.rejected,
+                shortest=control.shortest,
+                longest=control.longest,
+                last=self.last_step,
+                mean=self.time / self.steps if self.steps else math.nan,
+            )
+        return stats
+
     def stable_dt(self) -> float:
         """The integrator's largest stable step near the current state.
 
@@ -489,6 +541,9 @@ class Simulation:
             )
         policy = scene.solver.stability if stability is None else stability
         policy = choice("stability", policy, STABILITY_POLICIES, error=InputError)
+        if scene.solver.integrator == AUTO:
+            self.choice = choose_integrator(scene)
+            scene = scene.with_overrides({"solver.integrator": self.choice.name})
         before = (self.scene, self.integrator, self.dt)
         self.model.apply(scene)
         solver, was = scene.solver, self.scene.solver
@@ -604,10 +659,14 @@ class Simulation:
         sim.control.pinned = pinned
         sim.integrator.set_state(integrator_state)
         if sim.controller is not None and controller_state is not None:
-            previous, after_rejection, rejected = (float(value) for value in controller_state)
-            sim.controller.previous = None if previous < 0 else previous
-            sim.controller._after_rejection = bool(after_rejection)
-            sim.controller.rejected = int(rejected)
+            control = sim.controller
+            previous, after_rejection, rejected, *rest = (float(v) for v in controller_state)
+            control.previous = None if previous < 0 else previous
+            control._after_rejection = bool(after_rejection)
+            control.rejected = int(rejected)
+            if rest:  # the bounds as they were (the stable step was estimated then)
+                control.taken, control.min_step, control.max_step = rest
+            control.step = sim.dt = dt
         sim.update_mesh()
         return sim
 
@@ -736,12 +795,51 @@ class Simulation:
                 f"chosen for a tolerance; use solver.integrator = {embedded!r} with it, or "
                 f"leave solver.tolerance out for fixed steps",
             )
-        self.controller = StepController(tolerance, self.integrator.order, self.dt)
+        solver = self.scene.solver
+        largest = solver.max_dt or MAX_STEP
+        limit = self.stable_dt()
+        if math.isfinite(limit) and limit > 0.0:
+            # An explicit step beyond its stable one would only be rejected
+            # (measured: 69 rejections in 535 steps at 1e-2 m without this).
+            largest = min(largest, STABLE_SHARE * limit)
+        smallest = min(solver.min_dt or MIN_STEP, 0.5 * largest)
+        first = min(self.dt, largest)
+        if solver.dt is None:
+            first = min(first, max(self._starting_step(tolerance), smallest))
+        self.controller = StepController(
+            tolerance,
+            self.integrator.order,
+            first,
+            min_step=smallest,
+            max_step=largest,
+        )
+        self.dt = self.controller.step
+
+    def _starting_step(self, tolerance: float) -> float:
+        """A first step for a tolerance when none is given: the one whose
+        error estimate would be about the tolerance's share if the error
+        were the drift of the largest acceleration ``a`` over the step,
+        ``a h^2 / 2 <= tolerance h / 1 s`` for a first-order method and
+        ``a h^3 / 6 <= tolerance h`` for a second-order one (a start, in the
+        manner of Hairer, Norsett and Wanner's, *Solving ODEs I*, II.4: too
+        long a first step costs rejections, each a full step; too short a
+        few steps while it grows fivefold each)."""
+        acceleration = self.integrator.acceleration(
+            self.model, self.control, self.state.x, self.state.v
+        )
+        largest = float(np.sqrt(np.einsum("ij,ij->i", acceleration, acceleration).max(initial=0.0)))
+        if not largest > 0.0:
+            return math.inf
+        share = tolerance / UNIT_TIME
+        if self.integrator.order == 1:
+            return 2.0 * share / largest
+        return math.sqrt(6.0 * share / largest)
 
     def _advance_adaptive(self, seconds: float) -> None:
         """Steps chosen by the controller until exactly ``seconds`` later;
         rejected ones are retried shorter and leave no trace."""
         control = self.controller
+        steady = self.integrator.steady_steps
         end = self.state.t + seconds
         pinned = self.control.pinned_index
         start_time = self.state.t
@@ -749,17 +847,24 @@ class Simulation:
         goal = self.control.targets[pinned].copy()
         try:
             while self.state.t < end - 1e-12 * max(1.0, end):
-                if control.step < MIN_STEP:
+                if control.step < control.min_step:
                     raise DivergenceError(
                         f"simulation stopped at t = {self.state.t:.6g} s: {self.integrator.name}"
-                        f" needed steps under {MIN_STEP:g} s to keep its error under "
-                        f"{control.tolerance:g} m (a blow-up, or a tolerance too tight "
-                        f"for this cloth)"
+                        f" needed steps under {control.min_step:g} s (solver.min_dt) to keep "
+                        f"its error under {control.tolerance:g} m per second; the step had "
+                        f"fallen to {control.step:.3g} s. A blow-up, or a tolerance too tight "
+                        f"for this cloth: loosen solver.tolerance, lower solver.min_dt, or "
+                        f"try an implicit integrator"
                     )
                 natural = control.step
-                h = min(natural, end - self.state.t)
-                if end - (self.state.t + h) < 1e-9 * h:  # no sliver of a step left over
-                    h = end - self.state.t
+                remaining = end - self.state.t
+                if steady and control.taken > 0.0:
+                    # Keep the step (and its factorisation) unless worth changing.
+                    h = steady_step(natural, control.taken, remaining)
+                else:
+                    h = min(natural, remaining)
+                    if remaining - h < 1e-9 * h:  # no sliver of a step left over
+                        h = remaining
                 share = (self.state.t + h - start_time) / seconds
                 if self._substep(pinned, start + (goal - start) * share, dt=h):
                     if h < natural:

@@ -211,6 +211,10 @@ STABILITY_POLICIES = ("refuse", "substep", "ignore")
 #: The integrator names a scene may give. The scene layer knows the names
 #: only, so that describing a scene needs none of the solvers; every
 #: integrator the registry holds must be one of them (``register`` checks).
+#: ``solver.integrator`` that lets a probe choose (with ``solver.tolerance``).
+AUTO = "auto"
+#: Bounds of an adaptive step (s) when ``solver.min_dt`` / ``max_dt`` are left out.
+DEFAULT_MIN_DT, DEFAULT_MAX_DT = 1e-9, 0.05
 INTEGRATOR_NAMES = (
     "backward_euler",
     "explicit_euler",
@@ -248,11 +252,17 @@ class SolverSpec:
         other integrators leave it unused (``backward_euler`` iterates to its
         residual tolerance).
     tolerance : float, optional
-        Error per step in metres (1e-12 to 1): the step is then chosen for
-        every step from the integrator's own error estimate, rejected and
-        retried when over it (:mod:`pvcloth.physics.adaptive`); ``dt``, if
-        given, is the first step tried, and ``stability`` is not used. Needs
-        an integrator that measures its error (``rk23``).
+        Position error in metres (1e-12 to 1) a second of simulation may
+        add: the step is then chosen for every step from the integrator's
+        own error estimate, rejected and retried when over its share
+        (:mod:`pvcloth.physics.adaptive`); ``dt``, if given, is the first
+        step tried, and ``stability`` is not used. Needs an integrator that
+        measures its error (``rk23``, ``implicit_euler``,
+        ``fast_mass_spring``, ``backward_euler``) or ``"auto"``, which picks
+        the one a short probe finds cheapest (:mod:`pvcloth.physics.auto`).
+    min_dt, max_dt : float, optional
+        Bounds of an adaptive run's step in seconds (default 1e-9 and 0.05;
+        ``min_dt < max_dt <= 10``); only with ``tolerance``.
 
     Examples
     --------
@@ -265,6 +275,8 @@ class SolverSpec:
     0.0001
     >>> SolverSpec("fast_mass_spring", iterations=6).iterations
     6
+    >>> SolverSpec("auto", tolerance=1e-3, max_dt=0.01).max_dt
+    0.01
     """
 
     integrator: str = "symplectic_euler"
@@ -272,16 +284,38 @@ class SolverSpec:
     stability: str = "refuse"
     iterations: int | None = None
     tolerance: float | None = None
+    min_dt: float | None = None
+    max_dt: float | None = None
 
     def __post_init__(self):
         _set(self, "stability", choice("stability", self.stability, STABILITY_POLICIES))
         if self.tolerance is not None:
             _set(self, "tolerance", real("tolerance", self.tolerance, minimum=1e-12, maximum=1.0))
+        for key in ("min_dt", "max_dt"):
+            value = getattr(self, key)
+            if value is None:
+                continue
+            if self.tolerance is None:
+                raise SceneError(key, "bounds an adaptive step: give solver.tolerance with it")
+            _set(self, key, real(key, value, minimum=0.0, exclusive=True, maximum=10.0))
+        low = DEFAULT_MIN_DT if self.min_dt is None else self.min_dt
+        high = DEFAULT_MAX_DT if self.max_dt is None else self.max_dt
+        if not low < high:
+            raise SceneError(
+                "min_dt" if self.min_dt is not None else "max_dt",
+                f"the smallest step ({low:g} s) must be below the largest ({high:g} s)",
+            )
+        if self.integrator == AUTO and self.tolerance is None:
+            raise SceneError(
+                "integrator",
+                "'auto' chooses the cheapest method for an error tolerance: give "
+                "solver.tolerance (metres) with it, or name an integrator",
+            )
         if self.iterations is not None:
             _set(
                 self, "iterations", integer("iterations", self.iterations, minimum=1, maximum=10000)
             )
-        _set(self, "integrator", choice("integrator", self.integrator, INTEGRATOR_NAMES))
+        _set(self, "integrator", choice("integrator", self.integrator, (*INTEGRATOR_NAMES, AUTO)))
         if self.dt is not None:
             _set(self, "dt", real("dt", self.dt, minimum=0.0, exclusive=True, maximum=10.0))
 

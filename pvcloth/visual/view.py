@@ -572,5 +572,6 @@ class ClothView:
             self.plotter.renderer.ResetCameraClippingRange()
         if self.text is not None:
             self.text.SetInput(
-                f"t = {sim.time:5.2f} s   {sim.integrator.name}, dt = {sim.dt:.3g} s"
+                f"t = {sim.time:5.2f} s   {sim.integrator.name}, dt = {sim.last_step:.3g} s"
+                + (" (adaptive)" if sim.controller is not None else "")
             )

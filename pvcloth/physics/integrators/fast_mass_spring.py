@@ -4,13 +4,14 @@ prefactorised matrix."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
 from cholespy import CholeskySolverD, MatrixType
 
-from pvcloth.physics.integrators.base import Integrator, register
+from pvcloth.physics.integrators.base import Integrator, drift_error, register
 from pvcloth.physics.state import Control, State
 
 if TYPE_CHECKING:  # for annotations only: the model module imports no integrator
@@ -49,7 +50,12 @@ class FastMassSpring(Integrator):
     are held by their identity rows in the solve, and the factorisation (a
     sparse Cholesky factor, cholespy) is redone when the set of pinned points
     or a stiffness changes. The local step runs in a compiled loop over the
-    spring table (NumPy on the NumPy backend).
+    spring table (NumPy on the NumPy backend). The last few factorisations
+    are kept, one per step length (:data:`KEPT_FACTORS`), so an adaptive run
+    that goes back to an earlier step does not factorise again. Each step
+    leaves backward Euler's error estimate in :attr:`error`
+    (:func:`~pvcloth.physics.integrators.base.drift_error`): it measures the
+    time discretisation, not the iterations stopped early.
 
     Parameters
     ----------
@@ -64,75 +70,57 @@ class FastMassSpring(Integrator):
     converges_to = "backward_euler"
     iterative = True
     uses_blas = True  # sparse solves and long dot products
+    embedded = True  # backward Euler against the trapezoidal rule (drift_error)
+    steady_steps = True  # its factorisation depends on the step
 
     def __init__(self, iterations: int = 10, rho: float = 0.95):
         self.iterations = iterations
         self.rho = rho
-        self._key = None
+        self._factors: dict[tuple, _Factor] = {}
+        #: Error estimate of the last step (m): see :func:`drift_error`.
+        self.error = 0.0
+        #: Factorisations made so far (one per step length, pinned set and stiffness).
+        self.factorisations = 0
+        self._pull: np.ndarray | None = None  # (N, 3) buffers the iterations reuse
 
     def stable_dt(self, model: Model, state: State, control: Control) -> float:
         return float("inf")  # each iteration lowers a bounded-below energy
 
     # -- the constant parts ------------------------------------------------------
 
-    def _prepare(self, model: Model, control: Control, dt: float) -> None:
+    def _prepare(self, model: Model, control: Control, dt: float) -> _Factor:
         # Rebuilt when the step, a spring constant (model.revision) or the
         # pinned set (control.revision) changed: integers, no array compared.
         key = (dt, id(model), model.revision, id(control), control.revision)
-        if key == self._key:
-            return
-        springs = model.spring_table()
+        factor = self._factors.pop(key, None)
+        if factor is None:
+            factor = _factorise(model, control, dt)
+            self.factorisations += 1
+        self._factors[key] = factor  # the most recently used last
+        while len(self._factors) > KEPT_FACTORS:
+            del self._factors[next(iter(self._factors))]
         n = model.n_points
-        # Incidence: row s of G is e_a - e_b for spring s.
-        s = np.arange(springs.count)
-        incidence = sp.csr_matrix(
-            (np.r_[np.ones(s.size), -np.ones(s.size)], (np.r_[s, s], np.r_[springs.a, springs.b])),
-            shape=(s.size, n),
-        )
-        laplacian = (incidence.T @ sp.diags(springs.stiffness) @ incidence).tocsr()  # G^T K G
-        system = (sp.diags(model.mass) + dt * dt * laplacian).tocsr()
-        # Pinned points stay in the system as identity rows and columns, so
-        # that every array has all N points and no iteration gathers or
-        # scatters the free ones: x_p = target there, and the coupling
-        # S_fp x_p moves to the right-hand side of the free rows.
-        free = (~control.pinned).astype(float)
-        self._fixed = np.flatnonzero(control.pinned)
-        self._coupling = (sp.diags(free) @ system[:, self._fixed]).tocsr()
-        matrix = (
-            sp.diags(free) @ system @ sp.diags(free) + sp.diags(control.pinned.astype(float))
-        ).tocsr()
-        matrix.sort_indices()
-        # A sparse Cholesky factor (CHOLMOD inside cholespy): the matrix is
-        # symmetric positive definite; its solves cost a third of SuperLU's
-        # here (64x64: 0.29 against 0.89 ms for three right-hand sides).
-        self._factor = CholeskySolverD(
-            n,
-            matrix.indptr.astype(np.int32),
-            matrix.indices.astype(np.int32),
-            matrix.data,
-            MatrixType.CSR,
-        )
-        self._weight = dt * dt * springs.stiffness  # h^2 k per spring
-        self._pull = np.empty((n, 3))
-        self._rhs = np.empty((n, 3))
-        self._iterates = (np.empty((n, 3)), np.empty((n, 3)))
-        self._key = key
+        if self._pull is None or self._pull.shape[0] != n:
+            self._pull = np.empty((n, 3))
+            self._rhs = np.empty((n, 3))
+            self._iterates = (np.empty((n, 3)), np.empty((n, 3)))
+        return factor
 
     # -- a step ---------------------------------------------------------------------
 
     def step(
         self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
-        self._prepare(model, control, dt)
+        factor = self._prepare(model, control, dt)
         x, v = state.x, state.v
         other = np.zeros_like(x)
         for term in model.other_forces:
             term.accumulate(x, v, other)
         y = x + dt * v + dt * dt * other * control.inv_mass[:, None]
-        fixed = self._fixed
+        fixed = factor.fixed
         pinned_next = x[fixed] + dt * v[fixed]  # the simulation set their velocity
         base = model.mass[:, None] * y
-        base -= self._coupling @ pinned_next
+        base -= factor.coupling @ pinned_next
         base[fixed] = pinned_next
         guess = y
         guess[fixed] = pinned_next
@@ -143,10 +131,10 @@ class FastMassSpring(Integrator):
             # local: every spring at its rest length along its current
             # direction (h^2 k L u, summed at its ends); global: one solve,
             # the pinned rows reset to their targets.
-            model.spring_projection(guess, self._weight, pull)
+            model.spring_projection(guess, factor.weight, pull)
             np.add(base, pull, out=rhs)
             rhs[fixed] = pinned_next
-            self._factor.solve(rhs, new)
+            factor.solver.solve(rhs, new)
             # Chebyshev: x_k+1 = omega (x^_k+1 - x_k-1) + x_k-1, omega from
             # the recurrence of Chebyshev polynomials (omega = 1 at first).
             # Pinned rows stay exact: omega (p - p) + p = p.
@@ -161,4 +149,55 @@ class FastMassSpring(Integrator):
             y[...] = guess  # the result lives in the step's own array
             guess = y
         v_new = (guess - x) / dt
+        self.error = drift_error(dt, v, v_new)
         return State(guess, v_new, state.t + dt)
+
+
+#: Factorisations :class:`FastMassSpring` keeps (the most recently used).
+KEPT_FACTORS = 4
+
+
+@dataclass
+class _Factor:
+    """What one step length's global solve needs."""
+
+    solver: CholeskySolverD  # of the system matrix, pinned rows as identity
+    fixed: np.ndarray  # (P,) indices of the pinned points
+    coupling: sp.csr_matrix  # (N, P) free rows' coupling to the pinned points
+    weight: np.ndarray  # (S,) h^2 k per spring
+
+
+def _factorise(model: Model, control: Control, dt: float) -> _Factor:
+    """The global step's matrix ``M + h^2 G^T K G`` for this step, factorised."""
+    springs = model.spring_table()
+    n = model.n_points
+    # Incidence: row s of G is e_a - e_b for spring s.
+    s = np.arange(springs.count)
+    incidence = sp.csr_matrix(
+        (np.r_[np.ones(s.size), -np.ones(s.size)], (np.r_[s, s], np.r_[springs.a, springs.b])),
+        shape=(s.size, n),
+    )
+    laplacian = (incidence.T @ sp.diags(springs.stiffness) @ incidence).tocsr()  # G^T K G
+    system = (sp.diags(model.mass) + dt * dt * laplacian).tocsr()
+    # Pinned points stay in the system as identity rows and columns, so
+    # that every array has all N points and no iteration gathers or
+    # scatters the free ones: x_p = target there, and the coupling
+    # S_fp x_p moves to the right-hand side of the free rows.
+    free = (~control.pinned).astype(float)
+    fixed = np.flatnonzero(control.pinned)
+    coupling = (sp.diags(free) @ system[:, fixed]).tocsr()
+    matrix = (
+        sp.diags(free) @ system @ sp.diags(free) + sp.diags(control.pinned.astype(float))
+    ).tocsr()
+    matrix.sort_indices()
+    # A sparse Cholesky factor (CHOLMOD inside cholespy): the matrix is
+    # symmetric positive definite; its solves cost a third of SuperLU's
+    # here (64x64: 0.29 against 0.89 ms for three right-hand sides).
+    solver = CholeskySolverD(
+        n,
+        matrix.indptr.astype(np.int32),
+        matrix.indices.astype(np.int32),
+        matrix.data,
+        MatrixType.CSR,
+    )
+    return _Factor(solver, fixed, coupling, dt * dt * springs.stiffness)
