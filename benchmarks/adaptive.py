@@ -116,7 +116,8 @@ def main() -> None:
                 rows.append(("adaptive", tolerance, sim.steps, rejected, error, wall, ok))
                 print(title, method, rows[-1], flush=True)
             for share in shares[:2] if SMOKE else shares:
-                dt = duration / np.ceil(duration / (share * stable))
+                # Whole steps per frame: the frames compared are at the same times.
+                dt = (1 / FPS) / np.ceil((1 / FPS) / (share * stable))
                 sim, error, wall, ok = run(base, duration, reference, integrator=method, dt=dt)
                 rows.append(("fixed", dt, sim.steps, 0, error, wall, ok))
                 print(title, method, rows[-1], flush=True)

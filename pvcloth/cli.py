@@ -203,8 +203,20 @@ def cmd_tradeoff(args) -> None:
         scene = scene.with_resolution(args.resolution)
     integrators = args.integrators.split(",") if args.integrators else None
     steps = [float(v) for v in args.steps.split(",")] if args.steps else None
+    tolerances = None
+    if args.tolerances is not None:
+        tolerances = [
+            real("--tolerances", parse_value(v), minimum=1e-12, maximum=1.0, error=InputError)
+            for v in args.tolerances.split(",")
+            if v.strip() and args.tolerances.strip() != "none"
+        ]
     runs = tradeoff.measure(
-        scene, integrators=integrators, steps=steps, duration=args.duration, progress=not args.quiet
+        scene,
+        integrators=integrators,
+        steps=steps,
+        duration=args.duration,
+        tolerances=tolerances,
+        progress=not args.quiet,
     )
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
@@ -326,6 +338,11 @@ def build_parser() -> argparse.ArgumentParser:
     trade.add_argument("--duration", type=float, default=0.25, help="simulated s per run")
     trade.add_argument("--integrators", help="comma-separated names (default: all)")
     trade.add_argument("--steps", help="comma-separated time steps in s (default: a range)")
+    trade.add_argument(
+        "--tolerances",
+        help="comma-separated tolerances (m) for adaptive runs of the methods that measure their "
+        "error, or 'none' (default: 1e-1,1e-2 for first-order methods, 1e-2 to 1e-5 for rk23)",
+    )
     trade.add_argument("--resolution", type=int, help="points per side instead of the scene's")
     trade.add_argument("--quiet", action="store_true", help="no progress bar")
     trade.set_defaults(func=cmd_tradeoff)

@@ -72,10 +72,41 @@ def test_command_writes_csv_plot_and_table(tmp_path, capsys):
     )
     assert code == 0
     rows = list(csv.DictReader(open(tmp_path / "tradeoff.csv")))
-    assert len(rows) == 4
+    # two fixed steps each, and implicit Euler (it measures its error) at
+    # the first-order default tolerances
+    assert len(rows) == 6
     assert {r["integrator"] for r in rows} == {"symplectic_euler", "implicit_euler"}
+    adaptive = sorted(float(r["tolerance"]) for r in rows if r["tolerance"] != "nan")
+    assert adaptive == [1e-2, 1e-1]
     assert iio.imread(tmp_path / "tradeoff.png").ndim == 3
-    assert "Pareto front" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "Pareto front" in out and "tol: an adaptive run's tolerance" in out
+
+
+def test_adaptive_runs_join_the_fixed_ones():
+    """rk23 at three tolerances beside its fixed steps: its error shrinks
+    with the tolerance and stays under ``tolerance * t`` (the relation
+    :mod:`pvcloth.physics.adaptive` states, for the largest point error; the
+    RMS one is smaller)."""
+    scene = small_scene(6, stiffness=100.0, damping=0.2, air_damping=0.5)
+    duration = 0.3
+    runs = measure(
+        scene,
+        integrators=["rk23"],
+        steps=[2e-3],
+        duration=duration,
+        tolerances=[1e-2, 1e-3, 1e-4],
+        progress=False,
+    )
+    adaptive = sorted((r for r in runs if r.adaptive), key=lambda r: -r.tolerance)
+    assert [r.tolerance for r in adaptive] == [1e-2, 1e-3, 1e-4]
+    errors = [r.rms_error for r in adaptive]
+    assert errors == sorted(errors, reverse=True)
+    assert all(r.rms_error < r.tolerance * duration for r in adaptive)
+    assert all(r.dt == pytest.approx(duration / r.steps) for r in adaptive)
+    assert "1e-04" in table(runs)
+    fixed = [r for r in runs if not r.adaptive]
+    assert len(fixed) == 1 and fixed[0].dt == pytest.approx(2e-3)
 
 
 def test_implicit_errors_split_into_time_and_solver_parts():

@@ -137,7 +137,8 @@ class StepController:
                 factor = min(factor, 1.0)
             self.previous, self._after_rejection = ratio, False
             self.taken = self.step
-            self.shortest, self.longest = min(self.shortest, self.step), max(self.longest, self.step)
+            self.shortest = min(self.shortest, self.step)
+            self.longest = max(self.longest, self.step)
             self.step = min(self.max_step, self.step * factor)
             return True
         factor = SHRINK if not math.isfinite(ratio) else max(SHRINK, SAFETY * ratio ** (-1.0 / k))

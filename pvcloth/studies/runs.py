@@ -89,11 +89,19 @@ class TimedRun:
 
 
 def timed_run(
-    scene: Scene, duration: float, *, integrator: str | None = None, dt: float | None = None
+    scene: Scene,
+    duration: float,
+    *,
+    integrator: str | None = None,
+    dt: float | None = None,
+    tolerance: float | None = None,
 ) -> TimedRun:
     """Run ``scene`` for ``duration`` simulated seconds at exactly the step
     given (``stability="ignore"``: an unstable step really runs and shows as
-    unstable), timing it by the wall clock."""
+    unstable), or with steps chosen for ``tolerance`` (m), timing it by the
+    wall clock."""
+    if tolerance is not None:
+        scene = scene.with_overrides({"solver.tolerance": tolerance, "solver.dt": None})
     sim = Simulation(scene, integrator=integrator, dt=dt, stability="ignore")
     start = time.perf_counter()
     try:

@@ -18,6 +18,13 @@ iterations, no dashpots) have their error split in two with the converged
 lowers it) and the **solver** error (the method's distance from backward
 Euler at that step: what stopping early, or leaving terms out, costs; more
 iterations lower it).
+
+The methods that measure their own error (``rk23``, ``implicit_euler``,
+``fast_mass_spring``) also run with ``solver.tolerance`` at a few
+tolerances, their steps chosen by the controller
+(:mod:`pvcloth.physics.adaptive`): these join the plot as dashed lines,
+their step the mean one (simulated time over steps), so a glance shows what
+letting the controller choose costs against the best fixed step.
 """
 
 from __future__ import annotations
@@ -60,6 +67,20 @@ class Run:
     discretisation_error: float = math.nan
     #: ... and this run's RMS distance from that backward Euler run (m).
     solver_error: float = math.nan
+    #: The tolerance (m) an adaptive run's steps were chosen for (``dt`` is
+    #: then its mean step); nan for a fixed step.
+    tolerance: float = math.nan
+
+    @property
+    def adaptive(self) -> bool:
+        return not math.isnan(self.tolerance)
+
+
+#: Tolerances (m) adaptive runs take by default, by the method's order: a
+#: first-order method's step shrinks in proportion to the tolerance (1e-3 m
+#: costs implicit Euler minutes per simulated second at 32x32), a
+#: second-order one's as its square root.
+DEFAULT_TOLERANCES = {1: (1e-1, 1e-2), 2: (1e-2, 1e-3, 1e-4, 1e-5)}
 
 
 def default_steps(scene, count: int = 8) -> list[float]:
@@ -68,8 +89,11 @@ def default_steps(scene, count: int = 8) -> list[float]:
     return [float(dt) for dt in np.geomspace(limit / 16, 1 / 30, count)]
 
 
-def measure(scene, *, integrators=None, steps=None, duration=0.25, progress=True) -> list[Run]:
-    """Run every integrator at every step and compare with the reference.
+def measure(
+    scene, *, integrators=None, steps=None, duration=0.25, tolerances=None, progress=True
+) -> list[Run]:
+    """Run every integrator at every step, and those that measure their
+    error at every tolerance, and compare with the reference.
 
     Parameters
     ----------
@@ -80,6 +104,11 @@ def measure(scene, *, integrators=None, steps=None, duration=0.25, progress=True
         Time steps in seconds; default :func:`default_steps`.
     duration : float
         Simulated seconds of each run.
+    tolerances : list of float, optional
+        Tolerances (m) of the adaptive runs, for every method among
+        ``integrators`` that measures its error (and is interactive:
+        ``backward_euler`` is left out); default :data:`DEFAULT_TOLERANCES`
+        by order; ``[]`` for none.
     progress : bool
         Show a progress bar.
 
@@ -102,16 +131,23 @@ def measure(scene, *, integrators=None, steps=None, duration=0.25, progress=True
         n for n in integrators if n != CONVERGED
     ]
     converged: dict[float, np.ndarray] = {}  # step -> backward Euler's positions there
-    jobs = [(name, dt) for name in names for dt in steps]
-    for name, dt in tqdm(jobs, desc="trade-off runs", unit="run", disable=not progress):
-        run = timed_run(scene, duration, integrator=name, dt=dt)
+    jobs = [(name, dt, None) for name in names for dt in steps]
+    for name in integrators:
+        method = INTEGRATORS[name]
+        if method.embedded and method.interactive:
+            chosen = DEFAULT_TOLERANCES.get(method.order, ()) if tolerances is None else tolerances
+            jobs += [(name, None, tolerance) for tolerance in chosen]
+    for name, dt, tolerance in tqdm(jobs, desc="trade-off runs", unit="run", disable=not progress):
+        run = timed_run(scene, duration, integrator=name, dt=dt, tolerance=tolerance)
+        if tolerance is not None:
+            dt = duration / max(run.sim.steps, 1)  # the mean step
         split = (math.nan, math.nan)
         if run.stable:
             error = rms_distance(run.sim.positions, x_ref)
             drift = (run.sim.energy()["total"] - e_ref) / scale
-            if name == CONVERGED:
+            if name == CONVERGED and tolerance is None:
                 converged[dt] = run.sim.positions
-            elif name in approximate and dt in converged:
+            elif name in approximate and tolerance is None and dt in converged:
                 split = (
                     rms_distance(converged[dt], x_ref),
                     rms_distance(run.sim.positions, converged[dt]),
@@ -129,6 +165,7 @@ def measure(scene, *, integrators=None, steps=None, duration=0.25, progress=True
                     run.wall_per_sim_second,
                     run.sim.steps,
                     *split,
+                    math.nan if tolerance is None else tolerance,
                 )
             )
     return runs
@@ -168,7 +205,7 @@ def plot(runs: list[Run], path: Path, title: str) -> None:
     ceiling = 3 * max((r.rms_error for r in stable), default=1.0)
     for n, name in enumerate(sorted({r.integrator for r in runs})):
         color = f"C{n}"
-        ok = [r for r in stable if r.integrator == name]
+        ok = [r for r in stable if r.integrator == name and not r.adaptive]
         bad = [r for r in runs if r.integrator == name and not r.stable]
         ax.plot(
             [r.wall_per_sim_second for r in ok],
@@ -178,6 +215,19 @@ def plot(runs: list[Run], path: Path, title: str) -> None:
             label=name,
             alpha=0.85,
         )
+        chosen = sorted(
+            (r for r in stable if r.integrator == name and r.adaptive), key=lambda r: r.tolerance
+        )
+        if chosen:
+            ax.plot(
+                [r.wall_per_sim_second for r in chosen],
+                [r.rms_error for r in chosen],
+                "D--",
+                color=color,
+                markerfacecolor="white",
+                label=f"{name}, adaptive",
+                alpha=0.85,
+            )
         if bad:
             ax.plot(
                 [r.wall_per_sim_second for r in bad],
@@ -220,9 +270,11 @@ def table(runs: list[Run]) -> str:
     """Plain-text table of the runs, Pareto-optimal ones starred."""
     front = {id(r) for r in pareto_front(runs)}
     split = any(not math.isnan(r.solver_error) for r in runs)
+    adaptive = any(r.adaptive for r in runs)
     lines = [
-        f"{'integrator':<17}{'dt (s)':>10}{'stable':>8}{'RMS error (m)':>15}"
-        f"{'energy drift':>14}{'wall/sim s':>12}"
+        f"{'integrator':<17}{'dt (s)':>10}"
+        + (f"{'tol (m)':>9}" if adaptive else "")
+        + f"{'stable':>8}{'RMS error (m)':>15}{'energy drift':>14}{'wall/sim s':>12}"
         + (f"{'of which: time (m)':>20}{'solver (m)':>12}" if split else "")
     ]
     for r in runs:
@@ -235,11 +287,14 @@ def table(runs: list[Run]) -> str:
                 f"{'-' if math.isnan(value) else f'{value:.3e}':>{width}}"
                 for value, width in ((r.discretisation_error, 20), (r.solver_error, 12))
             )
+        tolerance = (f"{r.tolerance:>9.0e}" if r.adaptive else f"{'-':>9}") if adaptive else ""
         lines.append(
-            f"{r.integrator:<17}{r.dt:>10.3g}{'yes' if r.stable else 'NO':>8}"
+            f"{r.integrator:<17}{r.dt:>10.3g}{tolerance}{'yes' if r.stable else 'NO':>8}"
             f"{error:>15}{drift:>14}{r.wall_per_sim_second:>12.3g}{parts}{star}"
         )
     lines.append("* on the Pareto front (no run is both faster and more accurate)")
+    if adaptive:
+        lines.append("tol: an adaptive run's tolerance; its dt is the mean step it took")
     if split:
         lines.append(
             "time: converged backward Euler's error at that step; solver: the run's distance "
