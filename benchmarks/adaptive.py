@@ -80,8 +80,10 @@ def run(scene, duration, reference, **solver):
 
 
 def reference_frames(scene, duration):
-    """RK4 at a fixed step of 1/40000 of the run: every frame's positions."""
-    sim = pvcloth.Simulation(scene, integrator="rk4", dt=duration / 40000)
+    """RK4 at a fixed step of about 1/40000 of the run, a whole number per
+    frame (else a frame is read between steps): every frame's positions."""
+    frame = 1 / FPS
+    sim = pvcloth.Simulation(scene, integrator="rk4", dt=frame / np.ceil(frame * 40000 / duration))
     return [sim.positions.copy() for _ in sim.frames(round(duration * FPS) + 1, FPS)]
 
 
