@@ -79,6 +79,12 @@ def describe(sim: Simulation) -> str:
     )
     if sim.choice is not None:
         lines.append(f"chosen by   solver.integrator = 'auto': {sim.choice.reason}")
+    if sim.controller is not None and sim.integrator.converges_to is not None:
+        lines.append(
+            f"error       the tolerance bounds {sim.integrator.converges_to}'s time "
+            f"discretisation, not what {sim.integrator.name} leaves out of it (a linearised "
+            f"or early-stopped solve; pvcloth tradeoff measures that part)"
+        )
     if stable == 0.0:
         lines.append("stable dt   none: the stiffest mode is undamped and grows at any step")
     elif math.isinf(stable):
