@@ -11,7 +11,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import pvcloth
-from conftest import SCENES
+from conftest import SCENES, small_scene
 from pvcloth import Simulation
 from pvcloth.physics.adaptive import MAX_STEP
 
@@ -317,3 +317,36 @@ def test_a_tolerance_out_of_reach_stops_with_what_to_change():
     with pytest.raises(pvcloth.DivergenceError, match=r"solver\.min_dt.*loosen solver\.tolerance"):
         sim.advance(0.1)
     assert np.isfinite(sim.positions).all() and sim.time < 0.1
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "stiffness, mass", [(100.0, 0.2), (2000.0, 0.1)], ids=["soft", "stiff and light"]
+)
+def test_generated_cloths_keep_the_relation(stiffness, mass):
+    """Cloths made here, not bundled: a soft one and a stiff, light one (its
+    explicit step held by stability, so the error falls further below the
+    tolerance), 16x16, hanging by two corners. After 0.25 s the largest
+    point error is under ``tolerance * t`` and shrinks with the tolerance,
+    against RK4 at 12.5 us."""
+    scene = small_scene(
+        16,
+        stiffness=stiffness,
+        damping=0.05,
+        air_damping=0.5,
+        mass=mass,
+        dt=None,
+        pins=pvcloth.PinSpec(corners=("top-left", "top-right")),
+    )
+    t = 0.25
+    reference = Simulation(scene, integrator="rk4", dt=t / 20000, stability="ignore")
+    reference.advance(t)
+    errors = []
+    for tolerance in (1e-2, 1e-3, 1e-4, 1e-5):
+        sim = adaptive(scene, tolerance)
+        for _ in sim.frames(16, 60.0):
+            pass
+        error = largest_distance(sim.positions, reference.positions)
+        assert error < tolerance * t, (tolerance, error)
+        errors.append(error)
+    assert all(later < earlier for earlier, later in zip(errors, errors[1:], strict=False))
