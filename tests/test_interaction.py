@@ -131,6 +131,14 @@ def test_the_grabbed_point_has_a_handle_above_the_cloth_and_hover_shows_the_poin
     assert not app.hover_actor.visibility
     assert app.overlay.GetLayer() == 1  # drawn over the scene, never hidden by cloth
     np.testing.assert_allclose(app.handle.points[0], app.sim.positions[app.style.grabbed])
+    # Handle and leash draw in their orange; the leash once drew purple
+    # (viridis' low end: the line's "Distance" array mapped as scalars).
+    image = app.plotter.screenshot(return_img=True)[..., :3].astype(int)
+
+    def near(colour):
+        return int((np.abs(image - np.array(colour)).sum(axis=-1) < 40).sum())
+
+    assert near((232, 89, 12)) > 30 and near((68, 1, 84)) == 0
     iren._mouse_left_button_release(int(round(x)) + 30, int(round(y)))
     app.wait()
     app.frame()

@@ -285,7 +285,11 @@ class ClothApp:
             (self.hover, "#1c7ed6", 12),
             (self.leash, "#e8590c", 3),
         ):
-            actor = pv.Actor(mapper=pv.DataSetMapper(mesh))
+            mapper = pv.DataSetMapper(mesh)
+            # pv.Line carries a "Distance" array; drawn as scalars it made the
+            # leash purple instead of its colour.
+            mapper.SetScalarVisibility(False)
+            actor = pv.Actor(mapper=mapper)
             actor.prop.color = color
             actor.prop.point_size = size
             actor.prop.line_width = size
