@@ -500,3 +500,32 @@ def test_feature_pictures_match_their_references(name, tmp_path):
     # software GL differs by a few levels between builds; a change of look by many
     assert difference.mean() < 1.5
     assert (difference > 40).mean() < 0.01
+
+
+def test_the_overlay_says_an_adaptive_run_s_mean_step():
+    """Its last step is often one cut short to land on the frame: the overlay
+    gives the frame's mean step and how many there were."""
+    import pyvista as pv
+
+    from pvcloth.visual.view import ClothView
+
+    scene = pvcloth.load_scene(SCENES / "hanging.toml").with_resolution(8)
+    sim = pvcloth.Simulation(
+        scene.with_overrides({"solver.integrator": "rk23", "solver.tolerance": 1e-4})
+    )
+    plotter = pv.Plotter(off_screen=True, window_size=(320, 240))
+    view = ClothView(sim, plotter, camera="none", label=True)
+    steps, start = sim.steps, sim.time
+    sim.advance(1 / 30)
+    view.update()
+    mean = (sim.time - start) / (sim.steps - steps)
+    assert view.text.GetInput().endswith(
+        f"rk23, dt = {mean:.3g} s (adaptive, mean of {sim.steps - steps})"
+    )
+    fixed = pvcloth.Simulation(scene)
+    assert (
+        ClothView(fixed, plotter, camera="none", label=True)
+        .text.GetInput()
+        .endswith(f"dt = {fixed.dt:.3g} s")
+    )
+    plotter.close()

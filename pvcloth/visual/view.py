@@ -415,6 +415,7 @@ class ClothView:
             )
         self.obstacle_actors = self._add_obstacles()
         self.text = None
+        self._clock = None  # (time, steps) when the overlay last said the step
         if label:
             # Sized to the frame (9 points at 480 rows), so it never covers a
             # small picture.
@@ -571,7 +572,17 @@ class ClothView:
             camera.position, camera.focal_point, camera.up = position, focal, up
             self.plotter.renderer.ResetCameraClippingRange()
         if self.text is not None:
-            self.text.SetInput(
-                f"t = {sim.time:5.2f} s   {sim.integrator.name}, dt = {sim.last_step:.3g} s"
-                + (" (adaptive)" if sim.controller is not None else "")
-            )
+            step = self._step_text(sim)
+            self.text.SetInput(f"t = {sim.time:5.2f} s   {sim.integrator.name}, {step}")
+
+    def _step_text(self, sim) -> str:
+        """The step for the overlay: ``dt``, or for an adaptive run the mean
+        step since the last frame and how many it took (its last step alone
+        is often one shortened to land on the frame)."""
+        if sim.controller is None:
+            return f"dt = {sim.dt:.3g} s"
+        then, self._clock = self._clock, (sim.time, sim.steps)
+        if then is None or sim.steps <= then[1]:
+            return f"dt = {sim.dt:.3g} s (adaptive)"
+        steps = sim.steps - then[1]
+        return f"dt = {(sim.time - then[0]) / steps:.3g} s (adaptive, mean of {steps})"
