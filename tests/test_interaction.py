@@ -13,6 +13,7 @@ import time
 import numpy as np
 import pytest
 
+import pvcloth
 from conftest import SCENES
 from pvcloth import Simulation
 
@@ -200,6 +201,28 @@ def test_keys_pause_step_reset_and_cycle_each_integrator_at_its_own_step(app):
     assert seen["symplectic_euler"] < 1e-3
     press_key(app, "b")
     assert app.sim.time == 0.0
+
+
+def test_with_a_tolerance_i_cycles_the_methods_that_measure_their_error(tmp_path):
+    """`pvcloth run --tolerance`: every press of i lands on an integrator
+    that can keep the tolerance, instead of being refused for the others."""
+    from pvcloth.visual.window import ClothApp
+
+    scene = pvcloth.load_scene(SCENES / "hanging.toml").with_resolution(12)
+    sim = Simulation(scene.with_overrides({"solver.integrator": "rk23", "solver.tolerance": 1e-3}))
+    app = ClothApp(sim, off_screen=True, window_size=(320, 240), shot_folder=tmp_path)
+    app.plotter.show(auto_close=False, interactive_update=False)
+    app.physics.paused = True
+    app.physics.start()
+    try:
+        seen = []
+        for _ in range(3):
+            press_key(app, "i")
+            seen.append(app.sim.integrator.name)
+            assert app.sim.controller is not None and "refused" not in app.status.GetInput()
+        assert seen == ["fast_mass_spring", "implicit_euler", "rk23"]
+    finally:
+        app.close()
 
 
 def test_brackets_halve_and_double_the_step_and_refuse_an_unstable_one(app):

@@ -460,8 +460,15 @@ class ClothApp:
     def cycle_integrator(self):
         """The next integrator, at its own automatic step (1/60 s for the
         implicit ones, half the stable step for explicit ones); the
-        measuring-only ones (``backward_euler``) are left out."""
-        names = sorted(name for name, cls in INTEGRATORS.items() if cls.interactive)
+        measuring-only ones (``backward_euler``) are left out, and with a
+        tolerance those that cannot measure their error (every key press
+        would be refused)."""
+        adaptive = self.sim.scene.solver.tolerance is not None
+        names = sorted(
+            name
+            for name, cls in INTEGRATORS.items()
+            if cls.interactive and (cls.embedded or not adaptive)
+        )
         current = self.sim.integrator.name
         following = names[(names.index(current) + 1) % len(names)] if current in names else names[0]
 
