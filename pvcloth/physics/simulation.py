@@ -67,7 +67,9 @@ class Simulation:
     scene : Scene
         What to simulate.
     integrator : str, optional
-        Overrides ``scene.solver.integrator``.
+        Overrides ``scene.solver.integrator``; ``"auto"`` (with
+        ``solver.tolerance``) lets a short probe choose
+        (:mod:`pvcloth.physics.auto`).
     dt : float, optional
         Overrides ``scene.solver.dt`` (seconds per substep). When neither
         gives a step, the simulation takes the largest step that is at most
@@ -98,7 +100,12 @@ class Simulation:
     integrator : Integrator
     dt : float
         The step taken, seconds (``scene.solver.dt`` or a substep of it, or
-        the automatic step).
+        the automatic step); with a tolerance, the next step the controller
+        will try (:attr:`last_step` is the one last taken).
+    controller : StepController or None
+        Chooses each step when the scene gives ``solver.tolerance``.
+    choice : Choice or None
+        What ``solver.integrator = "auto"`` chose, and why.
     steps : int
         Steps taken since the start.
     owed : float
