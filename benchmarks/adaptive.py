@@ -10,10 +10,13 @@ the same method's fixed-step runs interpolated (log-log) at that error: the
 cost of letting the controller choose. Scenes: the 16x16 hanging cloth (a
 swing that calms), a 12x12 cloth dropped on the ground (a fall, an impact
 and rest: quiet and violent phases) and the 32x32 cotton cloth (stiff and
-light: rk23 is held by its stable step).
+light: rk23 is held by its stable step), and apart, a 16x16 swing that a strong
+air damping calms within 3 s (a violent start and a quiet end, no contact).
 
-Run:  python benchmarks/adaptive.py [--out FILE]
-      (writes benchmarks/results/adaptive.md)
+Run:  python benchmarks/adaptive.py [--out FILE] [--cases hanging,ground,cotton,calming]
+      (writes benchmarks/results/adaptive.md; the calming swing, 3 s, is
+      benchmarks/results/adaptive_calm.md:
+      python benchmarks/adaptive.py --cases calming --out benchmarks/results/adaptive_calm.md)
 """
 
 from __future__ import annotations
@@ -41,17 +44,25 @@ METHODS = {
 
 
 def cases():
-    """(title, scene, duration in s, methods measured)."""
+    """Name -> (title, scene, duration in s, methods measured)."""
     size = (lambda n: 8) if SMOKE else (lambda n: n)
     hanging = pvcloth.load_scene(SCENES / "hanging.toml").with_resolution(size(16))
     ground = pvcloth.load_scene(SCENES / "ground.toml").with_resolution(size(12))
     cotton = pvcloth.load_scene(SCENES / "cotton.toml").with_resolution(size(32))
     duration = 0.1 if SMOKE else 1.0
-    return [
-        ("hanging 16x16", hanging, duration, tuple(METHODS)),
-        ("ground drop 12x12", ground, duration, ("rk23", "fast_mass_spring")),
-        ("cotton 32x32", cotton, duration / 2, ("rk23",)),
-    ]
+    return {
+        "hanging": ("hanging 16x16", hanging, duration, tuple(METHODS)),
+        "ground": ("ground drop 12x12", ground, duration, ("rk23", "fast_mass_spring")),
+        "cotton": ("cotton 32x32", cotton, duration / 2, ("rk23",)),
+        # A violent start and a quiet end: the swing dies out (air damping
+        # 4 /s: e^-12 of its energy is left after 3 s).
+        "calming": (
+            "calming swing 16x16 (air damping 4 /s)",
+            hanging.with_overrides({"air_damping": 4.0}),
+            0.1 if SMOKE else 3.0,
+            ("rk23",),
+        ),
+    }
 
 
 #: Each run is repeated and its median wall time kept: the same step's cost
@@ -90,7 +101,18 @@ def reference_frames(scene, duration):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=HERE / "results" / "adaptive.md")
+    parser.add_argument(
+        "--cases",
+        default="hanging,ground,cotton",
+        help="comma-separated: hanging, ground, cotton, calming (default: the first three)",
+    )
     args = parser.parse_args()
+    chosen = cases()
+    unknown = set(args.cases.split(",")) - set(chosen)
+    if unknown:
+        parser.error(
+            f"--cases: unknown {', '.join(sorted(unknown))}; choose from {', '.join(chosen)}"
+        )
     lines = [
         "# Adaptive steps against fixed ones",
         "",
@@ -102,7 +124,7 @@ def main() -> None:
         "The stated relation is error <= about tolerance * t / 1 s "
         "(`pvcloth/physics/adaptive.py`).",
     ]
-    for title, scene, duration, methods in cases():
+    for title, scene, duration, methods in (chosen[name] for name in args.cases.split(",")):
         base = scene.with_overrides({"solver.dt": None})
         reference = reference_frames(base, duration)
         stable = pvcloth.Simulation(base, integrator="rk23").stable_dt()
