@@ -58,6 +58,9 @@ asserts the first two):
   ``tolerance * t`` at every tolerance from 1e-1 to 1e-4 m. Its steps shrink
   in proportion to the tolerance (first order): 1e-4 m took 107,000 steps
   for half a second.
+- A 16x16 swing that air damping calms within 3 s: 0.2 of ``tolerance * t``
+  from 1e-4 to 1e-6 m, at half the cost of the fixed step that reaches the
+  same error (the steps grow as the motion dies out).
 - A cloth dropped on the ground: the error stops shrinking below a few mm
   (and so does that of fixed steps): contact is resolved after each step,
   outside the error estimate, and its error is not smooth in the step. The
