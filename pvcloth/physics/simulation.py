@@ -146,9 +146,7 @@ class Simulation:
         scene = scene.with_overrides({k: v for k, v in given.items() if v is not None})
         #: How ``solver.integrator = "auto"`` chose (``None`` if the scene named one).
         self.choice: Choice | None = None
-        if scene.solver.integrator == AUTO:
-            self.choice = choose_integrator(scene)
-            scene = scene.with_overrides({"solver.integrator": self.choice.name})
+        scene = self._resolve_auto(scene)
         #: The scene being simulated, live edits (:meth:`update`) included:
         #: its ``solver.dt`` is the step asked for (``None``: automatic),
         #: ``dt`` the step taken (a substep of it, perhaps).
@@ -548,9 +546,7 @@ class Simulation:
             )
         policy = scene.solver.stability if stability is None else stability
         policy = choice("stability", policy, STABILITY_POLICIES, error=InputError)
-        if scene.solver.integrator == AUTO:
-            self.choice = choose_integrator(scene)
-            scene = scene.with_overrides({"solver.integrator": self.choice.name})
+        scene = self._resolve_auto(scene)
         before = (self.scene, self.integrator, self.dt)
         self.model.apply(scene)
         solver, was = scene.solver, self.scene.solver
@@ -821,6 +817,15 @@ class Simulation:
             max_step=largest,
         )
         self.dt = self.controller.step
+
+    def _resolve_auto(self, scene: Scene) -> Scene:
+        """``scene`` with ``solver.integrator = "auto"`` replaced by the
+        integrator a probe chose (kept in :attr:`choice`), so what runs, and
+        what a checkpoint saves, names it; other scenes as they are."""
+        if scene.solver.integrator != AUTO:
+            return scene
+        self.choice = choose_integrator(scene)
+        return scene.with_overrides({"solver.integrator": self.choice.name})
 
     def _starting_step(self, tolerance: float) -> float:
         """A first step for a tolerance when none is given: the one whose
