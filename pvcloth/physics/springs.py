@@ -257,11 +257,8 @@ class Springs:
         length = np.linalg.norm(d, axis=1)
         u = d / np.maximum(length, TINY_LENGTH)[:, None]
         uu = u[:, :, None] * u[:, None, :]
-        transverse = 1.0 - table.rest / np.maximum(length, TINY_LENGTH)
-        if not exact:
-            transverse = np.clip(transverse, 0.0, None)
         eye = np.eye(3)[None]
-        stiff = table.stiffness[:, None, None] * (uu + transverse[:, None, None] * (eye - uu))
+        stiff = stiffness_blocks(d, table.rest, table.stiffness, exact)
         if exact and self.damped:
             # f_a = c (u . dv) u with dv = v_b - v_a: its derivative in
             # x_b is c / L (s P + u (P dv)^T), P = I - u u^T, s = u . dv.
@@ -281,6 +278,23 @@ class Springs:
     def describe(self) -> str:
         k = max(float(g.stiffness.max()) for g in self.groups) if self.groups else 0.0
         return f"{self.name}: {self.count} springs, k up to {k:g} N/m"
+
+
+def stiffness_blocks(
+    d: np.ndarray, rest: np.ndarray, stiffness: np.ndarray, exact: bool
+) -> np.ndarray:
+    """Each spring's ``dF_a/dx_b`` ``(S, 3, 3)`` (N/m) for Hooke springs with
+    end-to-end vectors ``d`` ``(S, 3)`` (m), ``rest`` (m) and ``stiffness``
+    (N/m): ``k (u u^T + (1 - rest / L) (I - u u^T))``. The transverse part
+    is clamped at zero for compressed springs unless ``exact``, which keeps
+    ``-dF/dx`` positive semi-definite (Choi and Ko 2002)."""
+    length = np.linalg.norm(d, axis=1)
+    u = d / np.maximum(length, TINY_LENGTH)[:, None]
+    uu = u[:, :, None] * u[:, None, :]
+    transverse = 1.0 - rest / np.maximum(length, TINY_LENGTH)
+    if not exact:
+        transverse = np.clip(transverse, 0.0, None)
+    return stiffness[:, None, None] * (uu + transverse[:, None, None] * (np.eye(3)[None] - uu))
 
 
 class BlockPattern:

@@ -10,7 +10,9 @@ from cholespy import CholeskySolverD, MatrixType
 from scipy.sparse.linalg import splu
 
 from pvcloth.errors import DivergenceError
+from pvcloth.physics.forces import TINY_LENGTH
 from pvcloth.physics.integrators.base import Integrator, drift_error, register
+from pvcloth.physics.springs import BlockPattern, stiffness_blocks
 from pvcloth.physics.state import Control, State
 
 if TYPE_CHECKING:  # for annotations only: the model module imports no integrator
@@ -19,23 +21,37 @@ if TYPE_CHECKING:  # for annotations only: the model module imports no integrato
 
 @register
 class BackwardEuler(Integrator):
-    """Backward Euler, Newton's method with a line search run to a stated residual.
+    """Backward Euler as a minimisation, by Newton's method to a stated residual.
 
-    Finds the positions ``x'`` one step later that satisfy, at every free
-    point, ``r(x') = x' - x - h v - h^2 M^-1 F(x', v') = 0`` with ``v' =
-    (x' - x) / h``: every force, spring dashpots included, taken at the end
-    of the step. Each Newton iteration solves ``(M - h^2 K - h C) dx = -M r``
-    with the force Jacobians ``K = dF/dx`` and ``C = dF/dv`` at the current
-    iterate, and a backtracking line search halves the step until ``|r|``
-    falls. Far from the solution (unbalanced acceleration above :attr:`exact_below`) the
-    Jacobian is the clamped, positive definite one
-    :class:`~pvcloth.physics.integrators.implicit_euler.ImplicitEuler` uses
-    (sparse Cholesky, cholespy): where springs buckle the exact one is
-    indefinite and its steps were measured to wander between solutions.
-    Close to it the exact Jacobian (compressed springs' negative transverse
-    stiffness and the dashpots' turning with their spring included; sparse
-    LU, SuperLU) converges quadratically; should its direction not lower
-    the residual, the step goes back to the clamped one.
+    The step's end positions ``x'`` minimise the incremental potential
+    (Martin et al. 2011, Gast et al. 2015)
+
+    ``Psi(t) = |t - x - h v|^2_M / (2 h^2) + sum_s E_s(t) + A(t) - f . t``
+
+    whose stationary point is backward Euler's equation ``x' - x - h v - h^2
+    M^-1 F(x', v') = 0`` with ``v' = (x' - x) / h``. Each spring's energy
+    ``E_s = k/2 (L - rest)^2 + c/(2h) (L - L_0)^2`` holds its Hooke spring
+    and its dashpot, which acts on the change of the spring's length ``L``
+    over the step (``L_0`` at its start): ``c (L' - L_0)/h``, backward
+    Euler's value of the dashpot's ``c dL/dt``, along the spring's direction
+    at the end of the step. Both terms together are one spring of stiffness
+    ``k + c/h`` and rest length ``(k rest + c/h L_0) / (k + c/h)``. Air
+    damping is ``A = sum r m |t - x|^2 / (2 h)``; gravity and the wind are
+    ``f``, the wind (which has no potential) taken at an anchor iterate and
+    re-taken until it agrees with the end of the step.
+
+    Each Newton iteration solves ``(M (1 + r h) + h^2 H) dx = -M r_psi``
+    with ``H`` the springs' Hessian: clamped to positive semi-definite far
+    from the solution (unbalanced acceleration above :attr:`exact_below`;
+    sparse Cholesky, cholespy), exact close to it (compressed springs'
+    negative transverse stiffness; sparse LU, SuperLU) for quadratic
+    convergence. A backtracking line search on ``Psi`` (Armijo) accepts
+    the step: the clamped direction always descends it, so a short enough
+    step always lowers it, and an exact direction that does not is dropped
+    for the clamped one. (A search on ``|r|`` stalled where springs buckle,
+    the cotton scene at 1/60 s, because ``|r|`` has minima that are not
+    solutions; ``Psi`` has none.) The factorisation is kept from one
+    iteration to the next while the residual at least halves (a chord step).
 
     A step has converged when no point is left with an unbalanced
     acceleration (``r / h^2``, the force the step leaves unbalanced over the
@@ -46,18 +62,12 @@ class BackwardEuler(Integrator):
     does not magnify the residual), far below the errors it is used to
     measure. (A tolerance in metres would accept the first guess at small
     steps, whose residual ``h^2 F / m`` is tiny: at 7e-5 s it left out the
-    forces.) The factorisation is kept from one iteration to the next while
-    the residual at least halves each time (a chord step), and redone when
-    it does not. That makes
-    it the reference that separates, for an implicit method at a step ``h``,
-    the error of stopping its iterations early (its distance from this
-    method at the same ``h``) from the error of the time discretisation
-    (this method's distance from a fine reference). Several factorisations
-    per step (seconds per step at 64x64): a measuring instrument, not an
-    interactive method. Known limit: on stiff, light cloth that buckles at
-    frame steps (the cotton scene at 1/60 s, 32x32 and 64x64) the line
-    search stalls and the step raises instead of converging; the hanging
-    scene converges at every step measured.
+    forces.) That makes it the reference that separates, for an implicit
+    method at a step ``h``, the error of stopping its iterations early (its
+    distance from this method at the same ``h``) from the error of the time
+    discretisation (this method's distance from a fine reference). Several
+    factorisations per step (seconds per step at 64x64): a measuring
+    instrument, not an interactive method.
 
     Parameters
     ----------
@@ -73,8 +83,8 @@ class BackwardEuler(Integrator):
     uses_blas = True  # sparse solves and long dot products
     embedded = True  # against the trapezoidal rule from the same velocities (drift_error)
     #: Largest unbalanced acceleration (m/s^2) of any point in a converged step.
-    tolerance = 1e-3  # 1e-4 was measured to stall near 1e-3 on a 32x32 cotton step
-    #: Unbalanced acceleration (m/s^2) below which Newton takes the exact Jacobian.
+    tolerance = 1e-3
+    #: Unbalanced acceleration (m/s^2) below which Newton takes the exact Hessian.
     exact_below = 0.5
 
     def __init__(self, iterations: int = 100):
@@ -83,6 +93,7 @@ class BackwardEuler(Integrator):
         self.last_iterations = self.last_factorisations = 0
         #: Error estimate of the last step (m): see :func:`drift_error`.
         self.error = 0.0
+        self._pattern: tuple[int, BlockPattern] | None = None
 
     def stable_dt(self, model: Model, state: State, control: Control) -> float:
         return float("inf")  # the converged step is backward Euler's: A-stable
@@ -91,18 +102,23 @@ class BackwardEuler(Integrator):
         self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
         x, v = state.x, state.v
-        moves = control.inv_mass > 0
-        free = np.repeat(moves, 3)
-        mass = np.repeat(model.mass, 3)
+        table = model.spring_table()
+        if self._pattern is None or self._pattern[0] != id(table):
+            self._pattern = (id(table), BlockPattern(table.a, table.b, model.n_points))
         # Explicit drift as the start (a start from the last step's change
         # of velocity was measured to save nothing); pinned points where the
         # simulation sends them (it set their velocity).
         guess = x + dt * v
-        residual = self._residual(model, x, v, guess, dt, control)
+        potential = _StepPotential(model, x, v, dt, control.inv_mass, self._pattern[1])
+        potential.anchor(guess)
+        residual = potential.residual(guess)
         size = np.abs(residual).max() / dt**2
-        solve, exact, fresh, banned, forced = None, False, False, False, False
+        solve, exact, fresh, banned = None, False, False, False
         factorisations, previous_size = 0, np.inf
         for count in range(self.iterations + 1):
+            if size <= self.tolerance and potential.anchor(guess):
+                residual = potential.residual(guess)  # the wind taken here
+                size = np.abs(residual).max() / dt**2
             if size <= self.tolerance:
                 self.last_iterations, self.last_factorisations = count, factorisations
                 v_new = (guess - x) / dt
@@ -110,81 +126,158 @@ class BackwardEuler(Integrator):
                 return State(guess, v_new, state.t + dt)
             if count == self.iterations:
                 break
-            # Far from the solution the clamped, positive definite Jacobian
-            # (the exact one is indefinite where springs buckle, and its
-            # Newton steps wander between solutions); close to it the exact
-            # one, for quadratic convergence.
-            want_exact = (size < self.exact_below or forced) and not banned
+            # Far from the solution the clamped, positive definite Hessian
+            # (the exact one is indefinite where springs buckle); close to
+            # it the exact one, for quadratic convergence.
+            want_exact = size < self.exact_below and not banned
             if solve is None or want_exact != exact or size > 0.5 * previous_size:
                 exact = want_exact
-                solve = self._factorise(model, guess, (guess - x) / dt, dt, mass, free, exact)
+                solve = potential.factorise(guess, exact, control.pinned)
                 factorisations, fresh = factorisations + 1, True
             previous_size = size
-            correction = np.zeros_like(x)
-            correction[moves] = solve(-(model.mass[:, None] * residual)[moves].ravel()).reshape(
-                -1, 3
-            )
-            # Backtracking on |r|_2: the full step first, halved until the
-            # residual falls (1e-4 of the predicted fall, as Armijo asks).
-            norm = np.linalg.norm(residual)
-            alpha, trial_norm = 1.0, np.nan
-            while alpha >= 1 / 1024:
-                trial = guess + alpha * correction
-                trial_residual = self._residual(model, x, v, trial, dt, control)
-                if np.linalg.norm(trial_residual) <= (1.0 - 1e-4 * alpha) * norm:
-                    trial_norm = np.linalg.norm(trial_residual)
+            correction = solve(-model.mass[:, None] * residual)
+            trial = potential.search(guess, residual, correction)
+            if trial is None:
+                # No descent: a kept factor is redone; a fresh exact one
+                # gives way to the clamped; a fresh clamped one cannot fail
+                # but at rounding level, where the step is given up.
+                if fresh and not exact:
                     break
-                alpha /= 2
-            if not np.isfinite(trial_norm):
-                # No descent: a factor kept from an earlier iterate is
-                # redone here; a fresh exact one gives way to the clamped,
-                # and a fresh clamped one to the exact (once each).
-                if fresh and exact:
-                    banned, forced = True, False
-                elif fresh:
-                    if banned or forced:
-                        break
-                    forced = True
+                banned = banned or (fresh and exact)
                 solve = None
                 continue
-            guess, residual, fresh, forced = trial, trial_residual, False, False
+            guess, fresh = trial, False
+            residual = potential.residual(guess)
             size = np.abs(residual).max() / dt**2
         raise DivergenceError(
             f"backward Euler did not converge at t = {state.t:.6g} s: Newton's method left "
-            f"{size:.3g} m/s^2 unbalanced after {self.iterations} iterations (tolerance "
+            f"{size:.3g} m/s^2 unbalanced after {count} iterations (tolerance "
             f"{self.tolerance:g} m/s^2); a smaller dt converges in fewer"
         )
 
-    @staticmethod
-    def _factorise(model, x, v, dt, mass, free, exact: bool):
-        """A solver of ``(M - h^2 dF/dx - h dF/dv) dx = b`` at ``x, v`` on the
-        free rows: the exact Jacobian by sparse LU (SuperLU: it may be
-        indefinite), or the clamped, positive definite one by Cholesky."""
-        dfdx, dfdv = model.jacobians(x, v, exact=exact)
-        matrix = (sp.diags(mass) - dt * dfdv - dt * dt * dfdx).tocsr()[free][:, free]
+
+class _StepPotential:
+    """One step's incremental potential ``Psi`` (see :class:`BackwardEuler`):
+    its value, its gradient as a residual, its Hessian factorised, and the
+    line search along a Newton direction."""
+
+    def __init__(self, model: Model, x, v, dt: float, inv_mass, pattern: BlockPattern):
+        table = model.spring_table()
+        self.model, self.x, self.dt, self.inv_mass, self.pattern = model, x, dt, inv_mass, pattern
+        self.a, self.b = table.a, table.b
+        self.drift = x + dt * v  # (N, 3) m
+        self.rate = model.air.rate if model.air is not None else 0.0  # 1/s
+        # Spring and dashpot as one spring (see the class docstring).
+        start = np.linalg.norm(x[table.b] - x[table.a], axis=1)
+        viscous = table.damping / dt
+        self.stiffness = table.stiffness + viscous  # (S,) N/m
+        self.rest = np.where(
+            self.stiffness > 0,
+            (table.stiffness * table.rest + viscous * start) / np.maximum(self.stiffness, 1e-300),
+            table.rest,
+        )  # (S,) m
+        self.gravity = np.zeros_like(x)  # (N, 3) N
+        if model.gravity is not None:
+            model.gravity.accumulate(x, v, self.gravity)
+        self.constant = self.gravity.copy()  # gravity, plus the wind at the anchor
+        self._anchored_at: np.ndarray | None = None
+
+    def anchor(self, t: np.ndarray) -> bool:
+        """Take the wind at ``t``; whether that changed ``Psi`` (never without
+        wind, or when ``t`` is the anchor already)."""
+        wind = self.model.wind
+        if wind is None or (self._anchored_at is not None and np.array_equal(t, self._anchored_at)):
+            return False
+        self.constant = self.gravity.copy()
+        wind.accumulate(t, (t - self.x) / self.dt, self.constant)
+        self._anchored_at = t.copy()
+        return True
+
+    def change(self, t: np.ndarray, trial: np.ndarray) -> float:
+        """``Psi(trial) - Psi(t)`` in joules, from differences (``Psi`` itself
+        is large against the last iterations' changes, which its rounding
+        would hide)."""
+        dt, mass = self.dt, self.model.mass
+        move = trial - t
+        length_t = np.linalg.norm(t[self.b] - t[self.a], axis=1)
+        length_trial = np.linalg.norm(trial[self.b] - trial[self.a], axis=1)
+        # |p|^2 - |q|^2 = (p - q) . (p + q), for the gaps and the lengths alike
+        sum_gap = trial + t - 2 * self.drift
+        sum_moved = trial + t - 2 * self.x
+        inertia = 0.5 / dt**2 * float(mass @ np.einsum("ij,ij->i", move, sum_gap))
+        air = 0.5 * self.rate / dt * float(mass @ np.einsum("ij,ij->i", move, sum_moved))
+        springs = 0.5 * float(
+            self.stiffness @ ((length_trial - length_t) * (length_trial + length_t - 2 * self.rest))
+        )
+        return inertia + air + springs - float(np.vdot(self.constant, move))
+
+    def residual(self, t: np.ndarray) -> np.ndarray:
+        """``r(t) = h^2 M^-1 grad Psi`` ``(N, 3)`` in metres, zero at pinned
+        points: ``t - x - h v - h^2 M^-1 F(t, (t - x)/h)``."""
+        dt, mass = self.dt, self.model.mass
+        d = t[self.b] - t[self.a]
+        length = np.linalg.norm(d, axis=1)
+        pull = self.stiffness * (length - self.rest) / np.maximum(length, TINY_LENGTH)
+        on_a = d * pull[:, None]  # (S, 3) N, on end a (and minus it on end b)
+        force = self.constant - (self.rate / dt * mass)[:, None] * (t - self.x)
+        n = t.shape[0]
+        for axis in range(3):
+            force[:, axis] += np.bincount(self.a, on_a[:, axis], minlength=n)
+            force[:, axis] -= np.bincount(self.b, on_a[:, axis], minlength=n)
+        moves = (self.inv_mass > 0)[:, None]
+        return (t - self.drift - dt * dt * force * self.inv_mass[:, None]) * moves
+
+    def factorise(self, t: np.ndarray, exact: bool, pinned: np.ndarray):
+        """A solver of ``(M (1 + r h) + h^2 H(t)) dx = b`` on the free points,
+        ``b`` and ``dx`` ``(N, 3)`` (zero at pinned points): the exact Hessian
+        by sparse LU (it may be indefinite), the clamped one by Cholesky."""
+        dt, mass = self.dt, self.model.mass
+        blocks = stiffness_blocks(t[self.b] - t[self.a], self.rest, self.stiffness, exact)
+        dfdx = self.pattern.assemble(blocks)
+        free = np.repeat(~pinned, 3)
+        diagonal = np.repeat(mass * (1.0 + self.rate * dt), 3)
+        matrix = (sp.diags(diagonal) - dt * dt * dfdx).tocsr()[free][:, free]
         if exact:
             try:
-                return splu(matrix.tocsc()).solve
+                lu = splu(matrix.tocsc())
             except RuntimeError:  # exactly singular: the caller falls back
                 return lambda rhs: np.full_like(rhs, np.nan)
-        matrix.sort_indices()
-        factor = CholeskySolverD(
-            matrix.shape[0],
-            matrix.indptr.astype(np.int32),
-            matrix.indices.astype(np.int32),
-            matrix.data,
-            MatrixType.CSR,
-        )
+            inner = lu.solve
+        else:
+            matrix.sort_indices()
+            factor = CholeskySolverD(
+                matrix.shape[0],
+                matrix.indptr.astype(np.int32),
+                matrix.indices.astype(np.int32),
+                matrix.data,
+                MatrixType.CSR,
+            )
 
-        def solve(rhs):
-            result = np.empty_like(rhs)
-            factor.solve(rhs, result)
+            def inner(rhs):
+                result = np.empty_like(rhs)
+                factor.solve(rhs, result)
+                return result
+
+        def solve(rhs: np.ndarray) -> np.ndarray:
+            result = np.zeros_like(rhs)
+            result[~pinned] = inner(np.ascontiguousarray(rhs[~pinned]).ravel()).reshape(-1, 3)
             return result
 
         return solve
 
-    @staticmethod
-    def _residual(model, x, v, trial, dt, control) -> np.ndarray:
-        """``r`` at ``trial`` ``(N, 3)`` in metres, zero at pinned points."""
-        force = model.compute_forces(trial, (trial - x) / dt)
-        return trial - x - dt * v - dt * dt * force * control.inv_mass[:, None]
+    def search(self, guess: np.ndarray, residual: np.ndarray, correction: np.ndarray):
+        """Backtracking on ``Psi`` along ``correction`` from ``guess``, whose
+        residual is ``residual``: the full step, halved until ``Psi`` falls
+        by 1e-4 of the predicted fall (Armijo). The accepted point, or None
+        when the direction does not descend or no length down to 1/1024
+        passes."""
+        slope = float(np.vdot(self.model.mass[:, None] * residual, correction)) / self.dt**2
+        if not slope < 0:  # also NaN: an exactly singular matrix
+            return None
+        alpha = 1.0
+        while alpha >= 1 / 1024:
+            trial = guess + alpha * correction
+            if self.change(guess, trial) <= 1e-4 * alpha * slope:
+                return trial
+            alpha /= 2
+        return None
