@@ -188,18 +188,15 @@ class Model:
         """Kinetic energy in joules."""
         return 0.5 * float(self.mass @ np.einsum("ij,ij->i", v, v))
 
-    def jacobians(self, x: np.ndarray, v: np.ndarray, exact: bool = False):
+    def jacobians(self, x: np.ndarray, v: np.ndarray):
         """Sum of the terms' ``(dF/dx, dF/dv)`` as sparse ``(3N, 3N)``
-        matrices; ``exact`` asks the springs for their true derivative (see
+        matrices (the springs' clamped: see
         :meth:`~pvcloth.physics.springs.Springs.jacobians`)."""
         size = 3 * self.n_points
         dfdx = sp.csr_matrix((size, size))
         dfdv = sp.csr_matrix((size, size))
         for term in self.forces:
-            if isinstance(term, Springs):
-                jx, jv = term.jacobians(x, v, exact=exact)
-            else:
-                jx, jv = term.jacobians(x, v)
+            jx, jv = term.jacobians(x, v)
             if jx is not None:
                 dfdx = dfdx + jx
             if jv is not None:

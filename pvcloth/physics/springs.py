@@ -243,36 +243,24 @@ class Springs:
             total += 0.5 * float(np.sum(g.stiffness * (length - g.rest) ** 2))
         return total
 
-    def jacobians(
-        self, x: np.ndarray, v: np.ndarray, exact: bool = False
-    ) -> tuple[Jacobian, Jacobian]:
+    def jacobians(self, x: np.ndarray, v: np.ndarray) -> tuple[Jacobian, Jacobian]:
         """Force Jacobians ``(dF/dx, dF/dv)``, sparse ``(3N, 3N)``. The
         transverse (geometric) stiffness is clamped at zero for compressed
         springs, as Choi and Ko (2002) do, so that ``-dF/dx`` stays positive
         semi-definite, and the dashpots' dependence on their direction is
-        left out. ``exact=True`` keeps both (Newton's method near a solution
-        wants the true derivative; the matrix may then be indefinite)."""
+        left out."""
         table = self.table()
         d = x[table.b] - x[table.a]
-        length = np.linalg.norm(d, axis=1)
-        u = d / np.maximum(length, TINY_LENGTH)[:, None]
-        uu = u[:, :, None] * u[:, None, :]
-        eye = np.eye(3)[None]
-        stiff = stiffness_blocks(d, table.rest, table.stiffness, exact)
-        if exact and self.damped:
-            # f_a = c (u . dv) u with dv = v_b - v_a: its derivative in
-            # x_b is c / L (s P + u (P dv)^T), P = I - u u^T, s = u . dv.
-            dv = v[table.b] - v[table.a]
-            s = np.einsum("ij,ij->i", u, dv)
-            across = dv - s[:, None] * u  # P dv
-            scale = table.damping / np.maximum(length, TINY_LENGTH)
-            stiff += scale[:, None, None] * (
-                s[:, None, None] * (eye - uu) + u[:, :, None] * across[:, None, :]
-            )
+        stiff = stiffness_blocks(d, table.rest, table.stiffness, exact=False)
         if self._pattern is None:  # the springs never change: neither does the pattern
             self._pattern = BlockPattern(table.a, table.b, x.shape[0])
         dfdx = self._pattern.assemble(stiff)
-        dfdv = self._pattern.assemble(table.damping[:, None, None] * uu) if self.damped else None
+        dfdv = None
+        if self.damped:
+            u = d / np.maximum(np.linalg.norm(d, axis=1), TINY_LENGTH)[:, None]
+            dfdv = self._pattern.assemble(
+                table.damping[:, None, None] * u[:, :, None] * u[:, None, :]
+            )
         return dfdx, dfdv
 
     def describe(self) -> str:

@@ -227,16 +227,23 @@ class _StepPotential:
         moves = (self.inv_mass > 0)[:, None]
         return (t - self.drift - dt * dt * force * self.inv_mass[:, None]) * moves
 
-    def factorise(self, t: np.ndarray, exact: bool, pinned: np.ndarray):
-        """A solver of ``(M (1 + r h) + h^2 H(t)) dx = b`` on the free points,
-        ``b`` and ``dx`` ``(N, 3)`` (zero at pinned points): the exact Hessian
-        by sparse LU (it may be indefinite), the clamped one by Cholesky."""
+    def matrix(self, t: np.ndarray, exact: bool, pinned: np.ndarray) -> sp.csr_matrix:
+        """Newton's matrix ``M (1 + r h) + h^2 H(t)`` on the free points'
+        coordinates (the derivative of ``M r`` at ``t``): ``H`` the springs'
+        exact Hessian, or with compressed springs' transverse part clamped
+        at zero (positive definite)."""
         dt, mass = self.dt, self.model.mass
         blocks = stiffness_blocks(t[self.b] - t[self.a], self.rest, self.stiffness, exact)
         dfdx = self.pattern.assemble(blocks)
         free = np.repeat(~pinned, 3)
         diagonal = np.repeat(mass * (1.0 + self.rate * dt), 3)
-        matrix = (sp.diags(diagonal) - dt * dt * dfdx).tocsr()[free][:, free]
+        return (sp.diags(diagonal) - dt * dt * dfdx).tocsr()[free][:, free]
+
+    def factorise(self, t: np.ndarray, exact: bool, pinned: np.ndarray):
+        """A solver of :meth:`matrix` ``dx = b``, ``b`` and ``dx`` ``(N, 3)``
+        (zero at pinned points): the exact matrix by sparse LU (it may be
+        indefinite), the clamped one by Cholesky."""
+        matrix = self.matrix(t, exact, pinned)
         if exact:
             try:
                 lu = splu(matrix.tocsc())
