@@ -87,7 +87,7 @@ class BackwardEuler(Integrator):
     #: Unbalanced acceleration (m/s^2) below which Newton takes the exact Hessian.
     exact_below = 0.5
 
-    def __init__(self, iterations: int = 100):
+    def __init__(self, iterations: int = 200):
         self.iterations = iterations
         #: Newton iterations the last step took, and factorisations.
         self.last_iterations = self.last_factorisations = 0
@@ -113,7 +113,8 @@ class BackwardEuler(Integrator):
         potential.anchor(guess)
         residual = potential.residual(guess)
         size = np.abs(residual).max() / dt**2
-        solve, exact, fresh, banned = None, False, False, False
+        solve, exact, fresh = None, False, False
+        exact_limit = self.exact_below  # lowered when an exact direction fails
         factorisations, previous_size = 0, np.inf
         for count in range(self.iterations + 1):
             if size <= self.tolerance and potential.anchor(guess):
@@ -129,7 +130,7 @@ class BackwardEuler(Integrator):
             # Far from the solution the clamped, positive definite Hessian
             # (the exact one is indefinite where springs buckle); close to
             # it the exact one, for quadratic convergence.
-            want_exact = size < self.exact_below and not banned
+            want_exact = size < exact_limit
             if solve is None or want_exact != exact or size > 0.5 * previous_size:
                 exact = want_exact
                 solve = potential.factorise(guess, exact, control.pinned)
@@ -139,11 +140,15 @@ class BackwardEuler(Integrator):
             trial = potential.search(guess, residual, correction)
             if trial is None:
                 # No descent: a kept factor is redone; a fresh exact one
-                # gives way to the clamped; a fresh clamped one cannot fail
-                # but at rounding level, where the step is given up.
+                # gives way to the clamped until the residual is a quarter
+                # of what it is now (where springs buckle, the exact matrix
+                # can be indefinite some way from the solution and fine
+                # closer to it); a fresh clamped one cannot fail but at
+                # rounding level, where the step is given up.
                 if fresh and not exact:
                     break
-                banned = banned or (fresh and exact)
+                if fresh:
+                    exact_limit = size / 4
                 solve = None
                 continue
             guess, fresh = trial, False
