@@ -52,7 +52,6 @@ WARMUP = 0.2
 PVCLOTH_METHODS = ("fast_mass_spring:6", "fast_mass_spring:10", "symplectic_euler")
 NEWTON_METHODS = ("vbd", "xpbd")
 DAMPING_TIME = 2.5e-4  # s: dashpot over stiffness, as pvcloth's presets
-TRI_KD = DAMPING_TIME
 
 
 def grid_strain(x: np.ndarray, n: int, spacing: float) -> np.ndarray:
@@ -95,9 +94,7 @@ def run_pvcloth(scene, method: str, seconds: float) -> tuple[list[float], np.nda
     return frames, sim.positions.copy()
 
 
-def run_newton(
-    scene, method: str, seconds: float, substeps: int, iterations: int, scale: float = 1.0
-):
+def run_newton(scene, method: str, seconds: float, substeps: int, iterations: int):
     import newton
     import warp as wp
 
@@ -123,15 +120,15 @@ def run_newton(
         particle_radius=spacing / 4,
     )
     if method == "vbd":
-        mu, lam = scale * cotton.shear, scale * (cotton.stretch - 2 * cotton.shear)
-        builder.add_cloth_grid(**common, tri_ke=mu, tri_ka=lam, tri_kd=TRI_KD)
+        mu, lam = cotton.shear, cotton.stretch - 2 * cotton.shear
+        builder.add_cloth_grid(**common, tri_ke=mu, tri_ka=lam, tri_kd=DAMPING_TIME)
         builder.color(include_bending=True)
     else:
         builder.add_cloth_grid(
             **common,
             add_springs=True,
-            spring_ke=scale * cotton.stretch,
-            spring_kd=scale * cotton.stretch * DAMPING_TIME,
+            spring_ke=cotton.stretch,
+            spring_kd=cotton.stretch * DAMPING_TIME,
         )
     # Pin the two top corners (pvcloth's "top-left" and "top-right": the
     # last row), as kinematic particles: mass zero, not active.

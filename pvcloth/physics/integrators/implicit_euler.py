@@ -35,7 +35,10 @@ class ImplicitEuler(Integrator):
     backward Euler against the trapezoidal rule), so ``solver.tolerance``
     may choose its steps; the estimate measures the time discretisation,
     not the one linearisation (that is the solver error studies measure
-    against ``backward_euler``).
+    against ``backward_euler``; that reference takes each dashpot on its
+    spring's change of length over the step, this method on the relative
+    velocity along the spring, which differ only as the spring turns
+    within the step).
 
     Parameters
     ----------
