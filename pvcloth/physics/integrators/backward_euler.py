@@ -49,8 +49,8 @@ class BackwardEuler(Integrator):
     the step: the clamped direction always descends it, so a short enough
     step always lowers it, and an exact direction that does not is dropped
     for the clamped one. (A search on ``|r|`` stalled where springs buckle,
-    the cotton scene at 1/60 s, because ``|r|`` has minima that are not
-    solutions; ``Psi`` has none.) The factorisation is kept from one
+    the cotton scene at 1/60 s: ``|r|`` has local minima that are not
+    solutions, while every minimum of ``Psi`` is one.) The factorisation is kept from one
     iteration to the next while the residual at least halves (a chord step).
 
     A step has converged when no point is left with an unbalanced
