@@ -303,6 +303,10 @@ def test_auto_picks_a_method_says_why_and_records_it(tmp_path):
             "solver.max_dt: the smallest step (1e-09 s) must be below the largest (1e-10 s)",
         ),
         ({"solver.tolerance": 1e-3, "solver.max_dt": -1.0}, "solver.max_dt: must be greater"),
+        (  # rk23's stable step on this cloth is a few ms: a 0.02 s floor cannot hold
+            {"solver.tolerance": 1e-3, "solver.min_dt": 0.02},
+            "solver.min_dt: 0.02 s leaves no room under the largest step rk23 may take here",
+        ),
         ({"solver.tolerance": float("nan")}, "solver.tolerance: expected a finite number"),
         ({"solver.tolerance": 10.0}, "solver.tolerance: must be at most 1"),
     ],

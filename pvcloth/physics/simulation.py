@@ -805,6 +805,13 @@ class Simulation:
             # An explicit step beyond its stable one would only be rejected
             # (measured: 69 rejections in 535 steps at 1e-2 m without this).
             largest = min(largest, STABLE_SHARE * limit)
+        if solver.min_dt is not None and solver.min_dt > 0.5 * largest:
+            raise SceneError(
+                "solver.min_dt",
+                f"{solver.min_dt:g} s leaves no room under the largest step "
+                f"{self.integrator.name} may take here, {largest:.3g} s (0.8 of its stable "
+                f"step, or solver.max_dt); give at most {0.5 * largest:.3g} s or leave it out",
+            )
         smallest = min(solver.min_dt or MIN_STEP, 0.5 * largest)
         first = min(self.dt, largest)
         if solver.dt is None:
