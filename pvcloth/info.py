@@ -30,11 +30,6 @@ def describe(sim: Simulation) -> str:
         f"scene       {scene.name}",
         f"particles   {model.n_points} ({nx} x {ny}), cloth {scene.cloth.size[0]:g} x "
         f"{scene.cloth.size[1]:g} m, {scene.cloth.orientation}",
-        *(
-            [f"material    {scene.cloth.material} (its preset's values below; given keys win)"]
-            if scene.cloth.material
-            else []
-        ),
         f"mass        {model.mass.sum():.6g} kg total, {model.mass.min():.3g} to "
         f"{model.mass.max():.3g} kg per point",
     ]

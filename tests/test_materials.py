@@ -9,7 +9,6 @@ import pytest
 import pvcloth
 from conftest import SCENES
 from pvcloth import SceneError, build_model
-from pvcloth.info import describe
 from pvcloth.scene.materials import MATERIALS
 
 
@@ -67,28 +66,6 @@ def test_explicit_values_override_the_preset_and_bad_names_are_refused():
     assert edited.springs.shear.stiffness == MATERIALS["polyester"].shear
     with pytest.raises(SceneError, match="cloth.material.*did you mean 'denim'"):
         pvcloth.Scene.from_dict({"cloth": {"material": "denm"}})
-
-
-def test_the_scene_keeps_the_material_it_was_written_with(tmp_path):
-    """The name stays in the scene as a record (``pvcloth info`` prints it, a
-    checkpoint keeps it), changes with a new preset, and reading the scene
-    back leaves its numbers alone, explicit ones included."""
-    scene = pvcloth.load_scene(SCENES / "cotton.toml")
-    assert scene.cloth.material == "cotton"
-    assert "(cotton preset)" in dict(scene.summary())["cloth"]
-    again = pvcloth.Scene.from_dict(scene.to_dict())
-    assert again == scene
-    own = scene.with_overrides({"springs.shear.stiffness": 7.0})
-    assert own.cloth.material == "cotton" and own.springs.shear.stiffness == 7.0
-    assert pvcloth.Scene.from_dict(own.to_dict()).springs.shear.stiffness == 7.0
-    denim = scene.with_overrides({"cloth.material": "denim"})
-    assert denim.cloth.material == "denim"
-    assert denim.cloth.mass == pytest.approx(MATERIALS["denim"].density)
-    assert pvcloth.Scene().cloth.material is None
-    sim = pvcloth.Simulation(scene.with_resolution(6))
-    assert "material    cotton" in describe(sim)
-    pvcloth.save_checkpoint(sim, tmp_path / "cotton.npz")
-    assert pvcloth.load_checkpoint(tmp_path / "cotton.npz").scene.cloth.material == "cotton"
 
 
 def test_the_bundled_cotton_scene_uses_the_preset():

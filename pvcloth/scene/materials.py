@@ -128,15 +128,14 @@ def preset(name: Any, size: tuple[float, float]) -> dict[str, float]:
 
 def expand_material(data: dict) -> dict:
     """Scene data (nested tables, as :meth:`pvcloth.Scene.from_dict`
-    receives them) with what ``cloth.material`` presets filled in, keeping
-    every key the data gives itself (and ``cloth.material``, as a record of
-    the preset). ``data`` is not changed."""
+    receives them) with ``cloth.material`` replaced by what it presets,
+    keeping every key the data gives itself. ``data`` is not changed."""
     cloth = data.get("cloth")
-    if not isinstance(cloth, dict) or cloth.get("material") is None:
+    if not isinstance(cloth, dict) or "material" not in cloth:
         return data
     data = copy.deepcopy(data)
     cloth = data["cloth"]
-    name = cloth["material"]
+    name = cloth.pop("material")
     size = cloth.get("size", (1.0, 1.0))
     try:
         width, height = (float(v) for v in size)

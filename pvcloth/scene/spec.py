@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from pvcloth.errors import SceneError
-from pvcloth.scene.materials import MATERIALS, expand_material, preset
+from pvcloth.scene.materials import expand_material, preset
 from pvcloth.scene.overrides import assign, expand
 from pvcloth.scene.validation import check_keys, choice, integer, real, sequence, vector
 
@@ -86,11 +86,6 @@ class ClothSpec:
         ``"horizontal"`` lays it flat in the x-y plane (j runs along y).
     center : (float, float, float)
         Position of the cloth's centre in metres (each within +-1e4).
-    material : str, optional
-        The fabric preset (:data:`~pvcloth.scene.materials.MATERIALS`) the
-        scene was written with, kept as a record: reading a scene puts the
-        preset's mass and spring constants in their own keys, where keys the
-        scene gives itself win, so these numbers are what runs.
 
     Examples
     --------
@@ -104,12 +99,9 @@ class ClothSpec:
     mass: float = 0.2
     orientation: str = "vertical"
     center: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    material: str | None = None
 
     def __post_init__(self):
         _set(self, "size", vector("size", self.size, 2, **_LENGTH))
-        if self.material is not None:
-            _set(self, "material", choice("material", self.material, sorted(MATERIALS)))
         res = sequence("resolution", self.resolution, 2)
         _set(
             self,
@@ -733,8 +725,7 @@ class Scene:
         if "cloth.material" in changes:  # the preset first, then what else is given
             size = changes.get("cloth.size", self.cloth.size)
             rest = {k: v for k, v in changes.items() if k != "cloth.material"}
-            name = changes["cloth.material"]
-            changes = {**preset(name, tuple(size)), "cloth.material": name, **rest}
+            changes = {**preset(changes["cloth.material"], tuple(size)), **rest}
         data = self.to_dict()
         for key, value in changes.items():
             assign(data, key, value)
@@ -779,9 +770,8 @@ class Scene:
             (
                 "cloth",
                 f"{cloth.resolution[0]} x {cloth.resolution[1]} points, {cloth.size[0]:g} x "
-                f"{cloth.size[1]:g} m, {cloth.mass:g} kg"
-                + (f" ({cloth.material} preset)" if cloth.material else "")
-                + f", {cloth.orientation} at {_vec(cloth.center)} m",
+                f"{cloth.size[1]:g} m, {cloth.mass:g} kg, {cloth.orientation} "
+                f"at {_vec(cloth.center)} m",
             ),
             ("springs", "; ".join(springs) or "none"),
             ("pins", "; ".join(pins) or "none"),
