@@ -50,7 +50,9 @@ class BackwardEuler(Integrator):
     step always lowers it, and an exact direction that does not is dropped
     for the clamped one. (A search on ``|r|`` stalled where springs buckle,
     the cotton scene at 1/60 s: ``|r|`` has local minima that are not
-    solutions, while every minimum of ``Psi`` is one.) The factorisation is kept from one
+    solutions, while every minimum of ``Psi`` is one. Within ten times the
+    tolerance a fall of ``|r|`` passes too: there a small step's last
+    iterations change ``Psi`` by less than its rounding.) The factorisation is kept from one
     iteration to the next while the residual at least halves (a chord step).
 
     A step has converged when no point is left with an unbalanced
