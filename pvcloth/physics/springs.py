@@ -273,9 +273,10 @@ def stiffness_blocks(
 ) -> np.ndarray:
     """Each spring's ``dF_a/dx_b`` ``(S, 3, 3)`` (N/m) for Hooke springs with
     end-to-end vectors ``d`` ``(S, 3)`` (m), ``rest`` (m) and ``stiffness``
-    (N/m): ``k (u u^T + (1 - rest / L) (I - u u^T))``. The transverse part
-    is clamped at zero for compressed springs unless ``exact``, which keeps
-    ``-dF/dx`` positive semi-definite (Choi and Ko 2002)."""
+    (N/m): ``k (u u^T + (1 - rest / L) (I - u u^T))``. Unless ``exact``,
+    the transverse part is clamped at zero for compressed springs, which
+    keeps ``-dF/dx`` positive semi-definite (Choi and Ko 2002); ``exact``
+    keeps the true, possibly indefinite derivative."""
     length = np.linalg.norm(d, axis=1)
     u = d / np.maximum(length, TINY_LENGTH)[:, None]
     uu = u[:, :, None] * u[:, None, :]

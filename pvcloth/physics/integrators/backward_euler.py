@@ -52,8 +52,9 @@ class BackwardEuler(Integrator):
     the cotton scene at 1/60 s: ``|r|`` has local minima that are not
     solutions, while every minimum of ``Psi`` is one. Within ten times the
     tolerance a fall of ``|r|`` passes too: there a small step's last
-    iterations change ``Psi`` by less than its rounding.) The factorisation is kept from one
-    iteration to the next while the residual at least halves (a chord step).
+    iterations change ``Psi`` by less than its rounding.) The factorisation
+    is kept from one iteration to the next while the residual at least
+    halves (a chord step).
 
     A step has converged when no point is left with an unbalanced
     acceleration (``r / h^2``, the force the step leaves unbalanced over the
@@ -105,6 +106,8 @@ class BackwardEuler(Integrator):
     ) -> State:
         x, v = state.x, state.v
         table = model.spring_table()
+        # The pattern depends only on the springs' ends, which never change
+        # for a model; a new table (a live edit of the constants) rebuilds it.
         if self._pattern is None or self._pattern[0] != id(table):
             self._pattern = (id(table), BlockPattern(table.a, table.b, model.n_points))
         # Explicit drift as the start (a start from the last step's change
