@@ -36,7 +36,7 @@ _LAZY = {
     **{
         name: ("scene.spec", name)
         for name in ("CameraSpec", "ClothSpec", "ObstacleSpec", "PinSpec", "Scene", "SolverSpec")
-        + ("SpringSpec", "SpringsSpec", "WindSpec", "load_scene")
+        + ("SelfCollisionSpec", "SpringSpec", "SpringsSpec", "WindSpec", "load_scene")
     },
     "Simulation": ("physics.simulation", "Simulation"),
     **{name: ("physics.state", name) for name in ("Control", "State")},
@@ -81,6 +81,7 @@ __all__ = [
     "PvclothError",
     "Scene",
     "SceneError",
+    "SelfCollisionSpec",
     "Simulation",
     "SolverSpec",
     "SpringSpec",

@@ -24,6 +24,7 @@ from pvcloth.physics.kernels import (
     spring_projection_numpy,
 )
 from pvcloth.physics.obstacles import build_obstacle
+from pvcloth.physics.self_collision import SelfCollision
 from pvcloth.physics.springs import Springs, SpringTable
 
 
@@ -52,6 +53,9 @@ class Model:
     obstacles : list
         Rigid obstacles (see :mod:`pvcloth.physics.obstacles`); empty if the
         scene has none, and then no collision code runs.
+    self_collision : SelfCollision or None
+        Contact of the cloth with itself (:mod:`pvcloth.physics.self_collision`);
+        ``None`` unless the scene asks, and then no self-collision code runs.
     backend : {"numba", "numpy"}
         Where spring forces and the semi-implicit update are computed.
     revision : int
@@ -69,6 +73,7 @@ class Model:
     wind: Wind | None = None
     obstacles: list = field(default_factory=list)
     backend: str = "numpy"
+    self_collision: SelfCollision | None = None
 
     def __post_init__(self):
         self.revision = 0
@@ -292,4 +297,13 @@ def build_model(scene, backend: str | None = None) -> Model:
         wind,
         [build_obstacle(spec) for spec in scene.obstacles],
         resolve_backend(backend),
+        _self_collision(scene),
     )
+
+
+def _self_collision(scene) -> SelfCollision | None:
+    contact = scene.self_collision
+    if contact is None:
+        return None
+    nx, ny = scene.cloth.resolution
+    return SelfCollision((ny, nx), contact.thickness_for(scene.cloth), contact.friction)

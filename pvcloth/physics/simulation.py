@@ -923,7 +923,10 @@ class Simulation:
                 model.collide(state.x, new.x, new.v, self.control.movable_index, state.t, new.t)
         new.x[pinned] = pin_positions
         new.v[pinned] = pin_velocity
-        if new.checked is not None and not model.obstacles:
+        if model.self_collision is not None:
+            # After the pins land: they move as they are told, the rest keeps clear.
+            model.self_collision.resolve(state.x, new.x, new.v, self.control.inv_mass, dt)
+        if new.checked is not None and not model.obstacles and model.self_collision is None:
             speed, finite = new.checked  # pinned points included (their v is set above)
             speed = speed if finite else math.inf
         else:

@@ -549,6 +549,84 @@ class ObstacleSpec:
         _set(self, "path", tuple(frames))
 
 
+#: Friction between layers: cloth on cloth measures 0.2 to 0.8; above this
+#: the value is a typing error, not a fabric.
+MAX_CLOTH_FRICTION = 5.0
+#: A thickness may be at most this share of the flat grid's gap
+#: (:func:`flat_gap`), or the flat cloth would push itself apart.
+MAX_THICKNESS_SHARE = 0.5
+#: The thickness a ``[self_collision]`` table without one gets, as a share
+#: of the flat gap.
+DEFAULT_THICKNESS_SHARE = 0.3
+
+
+def flat_gap(size: tuple[float, float], resolution: tuple[int, int]) -> float:
+    """The closest two parts of a flat grid cloth that share no point come
+    (a cell's diagonal from the next cell's corner), in metres.
+
+    Examples
+    --------
+    >>> round(flat_gap((1.0, 1.0), (11, 11)), 4)
+    0.0707
+    """
+    hx = size[0] / (resolution[0] - 1)
+    hy = size[1] / (resolution[1] - 1)
+    return hx * hy / math.hypot(hx, hy)
+
+
+@dataclass(frozen=True)
+class SelfCollisionSpec:
+    """Contact of the cloth with itself (off unless a scene has one).
+
+    Parameters
+    ----------
+    thickness : float, optional
+        Distance (m) the cloth's layers keep apart, > 0 and at most half the
+        gap between neighbouring parts of the flat grid (:func:`flat_gap`:
+        11.2 mm for a 1 m cloth of 64 x 64 points, so 5.6 mm). ``None`` (the
+        default) takes 0.3 of that gap.
+    friction : float
+        Coulomb friction coefficient between layers, 0 to 5 (cloth on cloth
+        is about 0.2 to 0.8).
+
+    Examples
+    --------
+    >>> from pvcloth import Scene, SelfCollisionSpec
+    >>> scene = Scene(self_collision=SelfCollisionSpec(thickness=0.004))
+    >>> scene.self_collision.friction
+    0.3
+    """
+
+    thickness: float | None = None
+    friction: float = 0.3
+
+    def __post_init__(self):
+        if self.thickness is not None:
+            _set(
+                self,
+                "thickness",
+                real(
+                    "thickness",
+                    self.thickness,
+                    minimum=0.0,
+                    exclusive=True,
+                    maximum=MAX_THICKNESS,
+                ),
+            )
+        _set(
+            self,
+            "friction",
+            real("friction", self.friction, minimum=0.0, maximum=MAX_CLOTH_FRICTION),
+        )
+
+    def thickness_for(self, cloth: ClothSpec) -> float:
+        """The thickness in metres on ``cloth``'s grid (the default's share
+        of its gap when none was given)."""
+        if self.thickness is not None:
+            return self.thickness
+        return DEFAULT_THICKNESS_SHARE * flat_gap(cloth.size, cloth.resolution)
+
+
 @dataclass(frozen=True)
 class Scene:
     """A complete, validated description of a cloth simulation.
@@ -576,6 +654,9 @@ class Scene:
     obstacles : tuple of ObstacleSpec
         Spheres, boxes and ground planes; none by default (and then no
         collision code runs).
+    self_collision : SelfCollisionSpec, optional
+        Contact of the cloth with itself; ``None`` (the default) runs no
+        self-collision code.
     camera : CameraSpec
         How movies look at the scene (no effect on the physics).
 
@@ -596,6 +677,7 @@ class Scene:
     air_damping: float = 0.0
     wind: WindSpec | None = None
     obstacles: tuple[ObstacleSpec, ...] = ()
+    self_collision: SelfCollisionSpec | None = None
     camera: CameraSpec = field(default_factory=CameraSpec)
 
     def __post_init__(self):
@@ -628,7 +710,28 @@ class Scene:
                     f"expected an ObstacleSpec, got {type(obstacle).__name__}",
                 )
         _set(self, "obstacles", tuple(obstacles))
+        self._check_self_collision()
         self._check_pins_fit()
+
+    def _check_self_collision(self) -> None:
+        contact = self.self_collision
+        if contact is None:
+            return
+        if not isinstance(contact, SelfCollisionSpec):
+            raise SceneError(
+                "self_collision",
+                f"expected a SelfCollisionSpec or None, got {type(contact).__name__}",
+            )
+        gap = flat_gap(self.cloth.size, self.cloth.resolution)
+        if contact.thickness is not None and contact.thickness > MAX_THICKNESS_SHARE * gap:
+            nx, ny = self.cloth.resolution
+            raise SceneError(
+                "self_collision.thickness",
+                f"{contact.thickness:g} m is more than half the {gap:.3g} m gap between "
+                f"neighbouring parts of this flat {nx} x {ny} cloth of {self.cloth.size[0]:g} x "
+                f"{self.cloth.size[1]:g} m, so the flat cloth would push itself apart; "
+                f"use at most {MAX_THICKNESS_SHARE * gap:.3g} m here, or fewer points",
+            )
 
     def _check_pins_fit(self) -> None:
         nx, ny = self.cloth.resolution
@@ -684,6 +787,8 @@ class Scene:
                 kwargs[key] = _springs_from_dict(value)
             elif key == "wind":
                 kwargs[key] = _spec_from_dict(WindSpec, value, key)
+            elif key == "self_collision":
+                kwargs[key] = _spec_from_dict(SelfCollisionSpec, value, key)
             elif key == "obstacles":
                 kwargs[key] = tuple(
                     _spec_from_dict(ObstacleSpec, item, f"obstacles[{n}]")
@@ -783,7 +888,18 @@ class Scene:
             ("gravity", f"{_vec(self.gravity)} m/s^2, air damping {self.air_damping:g} 1/s"),
             ("wind", wind),
             ("obstacles", "; ".join(_obstacle_text(o) for o in self.obstacles) or "none"),
+            ("self-contact", self._self_collision_text()),
         ]
+
+    def _self_collision_text(self) -> str:
+        contact = self.self_collision
+        if contact is None:
+            return "off"
+        given = "" if contact.thickness is not None else " (0.3 of the grid's gap)"
+        return (
+            f"thickness {contact.thickness_for(self.cloth):.3g} m{given}, "
+            f"friction {contact.friction:g}"
+        )
 
     def __repr__(self) -> str:
         rows = "".join(f"\n  {topic:<10} {text}" for topic, text in self.summary())

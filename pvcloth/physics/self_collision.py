@@ -1,0 +1,626 @@
+"""Self-collision: the cloth against itself, after every step of any integrator.
+
+Like the obstacles (:mod:`pvcloth.physics.obstacles`), this acts after the
+integrator's step, on positions and velocities, so every integrator gets the
+same response. It runs only when the scene has a ``[self_collision]`` table;
+otherwise the model holds no :class:`SelfCollision` and no code of this
+module runs.
+
+The cloth's surface is the grid's triangles, two per cell (the wind's split:
+corners ``(a, a+1, a+nx+1)`` and ``(a, a+nx+1, a+nx)``), and its edges are
+the triangles' edges. Contact is between a point and a triangle it is not a
+corner of (*VF*), and between two edges that share no point (*EE*).
+
+One step ``x0 -> x1`` (``x0`` the start, free of intersections)
+-----------------------------------------------------------------
+1. **Candidates** (broad phase, :func:`box_pairs`): every point's box holds
+   its start and end, grown by ``pad``; a triangle's or an edge's box is the
+   union of its points' boxes. Boxes are hashed into a uniform grid of cells
+   and each pair that overlaps is found once (reported only from the cell
+   holding the lower corner of the overlap). No O(N^2) pass.
+2. **Proximity** (Bridson, Fedkiw and Anderson 2002, "Robust treatment of
+   collisions, contact and friction for cloth animation", sections 7.1-7.3):
+   each candidate closer than ``thickness`` at the end of the step is pushed
+   apart along the line of its closest points to the thickness (a position
+   projection, which adds no velocity and so no bounce), its approaching
+   relative velocity is removed (inelastic), and Coulomb friction with
+   ``friction`` times that normal change holds or slows its sliding. The
+   push is shared by the inverse masses and the closest point's barycentric
+   weights, so pinned points do not move and momentum is kept. No point is
+   moved more than ``pad / 2`` from where the step put it, which keeps every
+   path inside the boxes of step 1.
+3. **No crossing** (continuous, :func:`approaches`): for every candidate the
+   distance between its two primitives along the step's straight-line motion
+   ``x0 + s (x1 - x0)``, ``s`` in ``[0, 1]``, is bounded from below by
+   conservative advancement. The distance is Lipschitz in ``s``: for a
+   point and a triangle it changes by at most ``L = |dp| + max |da|`` per unit
+   ``s`` (the closest point of the triangle, held at its barycentric
+   weights, moves by at most its farthest corner's motion ``da``); for two
+   edges by at most ``max |dp_1| + max |dp_2|`` over their ends. So after a
+   distance ``d`` at ``s``, no contact can occur before ``s + d / L``; the
+   check advances by that much (less half the margin ``eta``) until ``s``
+   passes 1, and reports an approach when the distance falls below ``eta``
+   (a tenth of the thickness, or half the start distance if that is
+   smaller). Reported pairs **freeze**: their free points go back to the
+   start of the step and share their mean velocity (an inelastic impact,
+   Provot 1997's impact zone without rotation). Frozen points changed the
+   paths of their triangles and edges, so the check runs again on the
+   candidates they belong to, until nothing new freezes. The start of the
+   step was free of intersections and a frozen pair does not move, so this
+   ends, at worst with every point frozen at the start.
+
+Why no intersection appears: between two triangles that share no point, an
+intersection can only begin when a corner of one passes through the other or
+an edge of one passes through an edge of the other, while their points move
+on straight lines. Step 3 proves, with a margin, that no such VF or EE pair
+touches during the final motion of the step, so a cloth that started the step
+without intersections ends it without them. The exception is motion imposed
+on pinned points: they cannot be frozen, and a pin driven through the cloth
+can still push it through (counted in :attr:`Report.unresolved`).
+
+The kernels are compiled with numba when it is installed; without it the
+same functions run as plain Python (correct, and slow).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+try:
+    from numba import njit
+except ImportError:  # pragma: no cover - exercised only where numba is missing
+
+    def njit(*args, **kwargs):
+        if args and callable(args[0]):
+            return args[0]
+        return lambda function: function
+
+
+#: Conservative advancement gives up after this many samples of one pair and
+#: reports an approach (a freeze: safe, only less smooth).
+MAX_SAMPLES = 100
+#: The margin ``eta`` as a share of the thickness.
+MARGIN = 0.1
+#: Gauss-Seidel sweeps of the proximity response over the candidates.
+SWEEPS = 3
+
+
+def grid_triangles(shape: tuple[int, int]) -> np.ndarray:
+    """The two triangles of every cell of a ``(ny, nx)`` point grid, as
+    point indices, shape ``(2 (nx-1) (ny-1), 3)``."""
+    ny, nx = shape
+    a = (np.arange(nx - 1)[None, :] + nx * np.arange(ny - 1)[:, None]).ravel()
+    b, c, d = a + 1, a + nx, a + nx + 1
+    return np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]).astype(np.int64)
+
+
+def grid_edges(shape: tuple[int, int]) -> np.ndarray:
+    """Every edge of :func:`grid_triangles` once (along rows, along columns,
+    the cells' diagonals), shape ``(E, 2)``."""
+    ny, nx = shape
+    k = np.arange(nx * ny).reshape(ny, nx)
+    rows = np.stack([k[:, :-1].ravel(), k[:, 1:].ravel()], 1)
+    columns = np.stack([k[:-1, :].ravel(), k[1:, :].ravel()], 1)
+    diagonals = np.stack([k[:-1, :-1].ravel(), k[1:, 1:].ravel()], 1)
+    return np.concatenate([rows, columns, diagonals]).astype(np.int64)
+
+
+@dataclass
+class Report:
+    """What the self-collision of one step did (counts of pairs and points)."""
+
+    candidates: int = 0  # VF and EE pairs from the broad phase
+    contacts: int = 0  # pairs closer than the thickness that were pushed apart
+    frozen: int = 0  # points sent back to the start of the step
+    unresolved: int = 0  # approaching pairs whose free points were all frozen already
+
+
+class SelfCollision:
+    """Cloth-cloth contact for a grid cloth (see the module docstring).
+
+    Parameters
+    ----------
+    shape : (int, int)
+        ``(ny, nx)`` of the grid.
+    thickness : float
+        Distance (m) the layers are kept apart.
+    friction : float
+        Coulomb friction coefficient between layers (>= 0).
+
+    Attributes
+    ----------
+    triangles : ndarray of int, shape (T, 3)
+    edges : ndarray of int, shape (E, 2)
+    report : Report
+        What the last :meth:`resolve` did.
+    """
+
+    def __init__(self, shape: tuple[int, int], thickness: float, friction: float):
+        self.shape = tuple(shape)
+        self.thickness = float(thickness)
+        self.friction = float(friction)
+        self.triangles = grid_triangles(self.shape)
+        self.edges = grid_edges(self.shape)
+        self.report = Report()
+        self._capacity = 1 << 16
+
+    def resolve(self, x0: np.ndarray, x1: np.ndarray, v1: np.ndarray, inv_mass, dt: float):
+        """Make the step ``x0 -> x1`` free of self-intersection, in place on
+        ``x1`` (m) and ``v1`` (m/s), both ``(N, 3)``; ``inv_mass`` ``(N,)``
+        (1/kg, zero for pinned points) says who may move. Returns the
+        :class:`Report`."""
+        d = self.thickness
+        pad = d  # boxes grow by d/2 for proximity and d/2 for the push
+        lo = np.minimum(x0, x1) - pad
+        hi = np.maximum(x0, x1) + pad
+        vf = self._pairs(lo, hi, 0)
+        ee = self._pairs(lo, hi, 1)
+        start = x1.copy()
+        contacts = respond(
+            vf, ee, self.triangles, self.edges, x0, x1, v1, start, inv_mass,
+            d, self.friction, dt, 0.5 * pad, SWEEPS,
+        )  # fmt: skip
+        frozen, unresolved = freeze(
+            vf, ee, self.triangles, self.edges, x0, x1, v1, inv_mass, MARGIN * d
+        )
+        self.report = Report(len(vf) + len(ee), int(contacts), int(frozen), int(unresolved))
+        return self.report
+
+    def _pairs(self, lo, hi, kind: int) -> np.ndarray:
+        items = self.triangles if kind == 0 else self.edges
+        item_lo, item_hi = item_boxes(lo, hi, items)
+        query_lo, query_hi = (lo, hi) if kind == 0 else (item_lo, item_hi)
+        extent = (item_hi - item_lo).max(axis=1)
+        # Most boxes fit one cell; the few long ones (a fast point) span several.
+        cell = max(float(np.percentile(extent, 90)), 1e-9 * float(np.abs(hi).max() + 1.0))
+        while True:
+            out = np.empty((self._capacity, 2), np.int64)
+            n = box_pairs(
+                query_lo, query_hi, item_lo, item_hi, items, self.triangles, kind, cell, out
+            )
+            if n <= self._capacity:
+                return out[:n]
+            self._capacity = int(1.5 * n)
+
+
+# -- broad phase ---------------------------------------------------------------
+
+
+@njit(cache=True)
+def item_boxes(lo, hi, items):  # pragma: no cover
+    """Boxes ``(low, high)`` of triangles or edges: the union of their
+    points' boxes ``lo``, ``hi`` (N, 3)."""
+    n, corners = items.shape
+    low = np.empty((n, 3))
+    high = np.empty((n, 3))
+    for j in range(n):
+        for a in range(3):
+            low[j, a] = lo[items[j, 0], a]
+            high[j, a] = hi[items[j, 0], a]
+        for k in range(1, corners):
+            i = items[j, k]
+            for a in range(3):
+                low[j, a] = min(low[j, a], lo[i, a])
+                high[j, a] = max(high[j, a], hi[i, a])
+    return low, high
+
+
+@njit(cache=True)
+def box_pairs(qlo, qhi, blo, bhi, items, triangles, kind, cell, out):  # pragma: no cover
+    """Pairs ``(i, j)`` of query box ``i`` and item box ``j`` that overlap,
+    written into ``out`` (as many as fit); returns how many there are.
+
+    ``kind`` 0: queries are points, items triangles; a point is not paired
+    with a triangle it is a corner of. ``kind`` 1: queries and items are the
+    same edges; each pair once (``i < j``), none sharing a point.
+    """
+    origin = np.empty(3)
+    top = np.empty(3)
+    for a in range(3):
+        origin[a] = min(qlo[:, a].min(), blo[:, a].min())
+        top[a] = max(qhi[:, a].max(), bhi[:, a].max())
+    dims = np.empty(3, np.int64)
+    for a in range(3):
+        dims[a] = int((top[a] - origin[a]) / cell) + 1
+    nb = blo.shape[0]
+    c0 = np.empty((nb, 3), np.int64)
+    c1 = np.empty((nb, 3), np.int64)
+    total = 0
+    for j in range(nb):
+        span = 1
+        for a in range(3):
+            c0[j, a] = int((blo[j, a] - origin[a]) / cell)
+            c1[j, a] = int((bhi[j, a] - origin[a]) / cell)
+            span *= c1[j, a] - c0[j, a] + 1
+        total += span
+    keys = np.empty(total, np.int64)
+    ids = np.empty(total, np.int64)
+    m = 0
+    for j in range(nb):
+        for cx in range(c0[j, 0], c1[j, 0] + 1):
+            for cy in range(c0[j, 1], c1[j, 1] + 1):
+                for cz in range(c0[j, 2], c1[j, 2] + 1):
+                    keys[m] = (cx * dims[1] + cy) * dims[2] + cz
+                    ids[m] = j
+                    m += 1
+    order = np.argsort(keys)
+    keys = keys[order]
+    ids = ids[order]
+    found = 0
+    capacity = out.shape[0]
+    for i in range(qlo.shape[0]):
+        x0 = int((qlo[i, 0] - origin[0]) / cell)
+        y0 = int((qlo[i, 1] - origin[1]) / cell)
+        z0 = int((qlo[i, 2] - origin[2]) / cell)
+        x1 = int((qhi[i, 0] - origin[0]) / cell)
+        y1 = int((qhi[i, 1] - origin[1]) / cell)
+        z1 = int((qhi[i, 2] - origin[2]) / cell)
+        for cx in range(x0, x1 + 1):
+            for cy in range(y0, y1 + 1):
+                for cz in range(z0, z1 + 1):
+                    key = (cx * dims[1] + cy) * dims[2] + cz
+                    first = np.searchsorted(keys, key)
+                    while first < total and keys[first] == key:
+                        j = ids[first]
+                        first += 1
+                        if kind == 1 and j <= i:
+                            continue
+                        if (
+                            qlo[i, 0] > bhi[j, 0] or qhi[i, 0] < blo[j, 0]
+                            or qlo[i, 1] > bhi[j, 1] or qhi[i, 1] < blo[j, 1]
+                            or qlo[i, 2] > bhi[j, 2] or qhi[i, 2] < blo[j, 2]
+                        ):  # fmt: skip
+                            continue
+                        # Only the cell of the overlap's lower corner reports it.
+                        if (
+                            int((max(qlo[i, 0], blo[j, 0]) - origin[0]) / cell) != cx
+                            or int((max(qlo[i, 1], blo[j, 1]) - origin[1]) / cell) != cy
+                            or int((max(qlo[i, 2], blo[j, 2]) - origin[2]) / cell) != cz
+                        ):  # fmt: skip
+                            continue
+                        if kind == 0:
+                            if i == items[j, 0] or i == items[j, 1] or i == items[j, 2]:
+                                continue
+                        else:
+                            a0, a1 = items[i, 0], items[i, 1]
+                            b0, b1 = items[j, 0], items[j, 1]
+                            if a0 == b0 or a0 == b1 or a1 == b0 or a1 == b1:
+                                continue
+                        if found < capacity:
+                            out[found, 0] = i
+                            out[found, 1] = j
+                        found += 1
+    return found
+
+
+# -- closest points (3-vectors as tuples: values, never allocated) ------------------
+
+
+@njit(cache=True, inline="always")
+def _sub(a, b):  # pragma: no cover
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+@njit(cache=True, inline="always")
+def _dot(a, b):  # pragma: no cover
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@njit(cache=True, inline="always")
+def _clamp01(value):  # pragma: no cover
+    return min(1.0, max(0.0, value))
+
+
+@njit(cache=True, inline="always")
+def _at(x0, x1, s, i):  # pragma: no cover
+    """Point ``i`` at share ``s`` of the straight step ``x0 -> x1``."""
+    return (
+        x0[i, 0] + s * (x1[i, 0] - x0[i, 0]),
+        x0[i, 1] + s * (x1[i, 1] - x0[i, 1]),
+        x0[i, 2] + s * (x1[i, 2] - x0[i, 2]),
+    )
+
+
+@njit(cache=True)
+def point_segment(p, a, b):  # pragma: no cover
+    """Parameter ``s`` of the point of segment ``a b`` closest to ``p``."""
+    ab = _sub(b, a)
+    length2 = _dot(ab, ab)
+    if length2 <= 0.0:
+        return 0.0
+    return _clamp01(_dot(_sub(p, a), ab) / length2)
+
+
+@njit(cache=True)
+def point_triangle(p, a, b, c):  # pragma: no cover
+    """Barycentric weights ``(u, v, w)`` of the point ``u a + v b + w c`` of
+    triangle ``a b c`` closest to ``p`` (the Voronoi regions of corners,
+    edges and face, as in Ericson 2005, "Real-Time Collision Detection",
+    5.1.5). Points are 3-tuples."""
+    ab = _sub(b, a)
+    ac = _sub(c, a)
+    ap = _sub(p, a)
+    d1 = _dot(ab, ap)
+    d2 = _dot(ac, ap)
+    if d1 <= 0.0 and d2 <= 0.0:
+        return 1.0, 0.0, 0.0
+    bp = _sub(p, b)
+    d3 = _dot(ab, bp)
+    d4 = _dot(ac, bp)
+    if d3 >= 0.0 and d4 <= d3:
+        return 0.0, 1.0, 0.0
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        v = d1 / (d1 - d3)
+        return 1.0 - v, v, 0.0
+    cp = _sub(p, c)
+    d5 = _dot(ab, cp)
+    d6 = _dot(ac, cp)
+    if d6 >= 0.0 and d5 <= d6:
+        return 0.0, 0.0, 1.0
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        w = d2 / (d2 - d6)
+        return 1.0 - w, 0.0, w
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0:
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        return 0.0, 1.0 - w, w
+    total = va + vb + vc
+    if total <= 0.0:  # a triangle of no area: the nearest point of its edges
+        t_ab, t_bc, t_ac = point_segment(p, a, b), point_segment(p, b, c), point_segment(p, a, c)
+        g_ab = _sub(p, (a[0] + t_ab * ab[0], a[1] + t_ab * ab[1], a[2] + t_ab * ab[2]))
+        g_ac = _sub(p, (a[0] + t_ac * ac[0], a[1] + t_ac * ac[1], a[2] + t_ac * ac[2]))
+        bc = _sub(c, b)
+        g_bc = _sub(p, (b[0] + t_bc * bc[0], b[1] + t_bc * bc[1], b[2] + t_bc * bc[2]))
+        e_ab, e_bc, e_ac = _dot(g_ab, g_ab), _dot(g_bc, g_bc), _dot(g_ac, g_ac)
+        if e_ab <= e_bc and e_ab <= e_ac:
+            return 1.0 - t_ab, t_ab, 0.0
+        if e_bc <= e_ac:
+            return 0.0, 1.0 - t_bc, t_bc
+        return 1.0 - t_ac, 0.0, t_ac
+    v = vb / total
+    w = vc / total
+    return 1.0 - v - w, v, w
+
+
+@njit(cache=True)
+def segment_segment(p1, q1, p2, q2):  # pragma: no cover
+    """Parameters ``(s, t)`` of the closest points ``p1 + s (q1 - p1)`` and
+    ``p2 + t (q2 - p2)`` of two segments (as in Ericson 2005, 5.1.9)."""
+    d1 = _sub(q1, p1)
+    d2 = _sub(q2, p2)
+    r = _sub(p1, p2)
+    a = _dot(d1, d1)
+    e = _dot(d2, d2)
+    f = _dot(d2, r)
+    if a <= 0.0 and e <= 0.0:
+        return 0.0, 0.0
+    if a <= 0.0:
+        return 0.0, _clamp01(f / e)
+    c = _dot(d1, r)
+    if e <= 0.0:
+        return _clamp01(-c / a), 0.0
+    b = _dot(d1, d2)
+    denominator = a * e - b * b
+    s = _clamp01((b * f - c * e) / denominator) if denominator > 0.0 else 0.0
+    t = (b * s + f) / e
+    if t < 0.0:
+        return _clamp01(-c / a), 0.0
+    if t > 1.0:
+        return _clamp01((b - c) / a), 1.0
+    return s, t
+
+
+@njit(cache=True, inline="always")
+def _corners(kind, pair, triangles, edges):  # pragma: no cover
+    """The four points of a VF (kind 0: the point, then the triangle's) or
+    EE (kind 1: the first edge's, then the second's) pair."""
+    if kind == 0:
+        tri = triangles[pair[1]]
+        return pair[0], tri[0], tri[1], tri[2]
+    return edges[pair[0], 0], edges[pair[0], 1], edges[pair[1], 0], edges[pair[1], 1]
+
+
+@njit(cache=True)
+def _closest(kind, i0, i1, i2, i3, x0, x1, s):  # pragma: no cover
+    """Signed weights ``(w0, w1, w2, w3)`` of the pair's closest points at
+    share ``s`` of the step, and the gap vector ``sum w_k x_k`` from the
+    second primitive's closest point to the first's."""
+    p0, p1, p2, p3 = _at(x0, x1, s, i0), _at(x0, x1, s, i1), _at(x0, x1, s, i2), _at(x0, x1, s, i3)
+    if kind == 0:
+        u, v, t = point_triangle(p0, p1, p2, p3)
+        w = (1.0, -u, -v, -t)
+    else:
+        a, b = segment_segment(p0, p1, p2, p3)
+        w = (1.0 - a, a, b - 1.0, -b)
+    gap = (
+        w[0] * p0[0] + w[1] * p1[0] + w[2] * p2[0] + w[3] * p3[0],
+        w[0] * p0[1] + w[1] * p1[1] + w[2] * p2[1] + w[3] * p3[1],
+        w[0] * p0[2] + w[1] * p1[2] + w[2] * p2[2] + w[3] * p3[2],
+    )
+    return w, gap
+
+
+# -- proximity response ------------------------------------------------------------
+
+
+@njit(cache=True)
+def respond(
+    vf, ee, triangles, edges, x0, x, v, start, inv_mass, thickness, friction, dt, reach, sweeps
+):  # pragma: no cover
+    """Push every pair closer than ``thickness`` apart, in place on ``x`` and
+    ``v`` (step 2 of the module docstring); no point ends farther than
+    ``reach`` from ``start``. Returns how many pair contacts were handled."""
+    ids = np.empty(4, np.int64)
+    contacts = 0
+    for _ in range(sweeps):
+        touched = 0
+        for kind in range(2):
+            pairs = vf if kind == 0 else ee
+            for n in range(pairs.shape[0]):
+                i0, i1, i2, i3 = _corners(kind, pairs[n], triangles, edges)
+                w, gap = _closest(kind, i0, i1, i2, i3, x, x, 0.0)
+                distance = math.sqrt(_dot(gap, gap))
+                if distance >= thickness:
+                    continue
+                if distance <= 1e-9 * thickness:  # touching: the side they came from
+                    _, gap = _closest(kind, i0, i1, i2, i3, x0, x0, 0.0)
+                    distance = math.sqrt(_dot(gap, gap))
+                    if distance == 0.0:
+                        continue
+                normal = (gap[0] / distance, gap[1] / distance, gap[2] / distance)
+                ids[0], ids[1], ids[2], ids[3] = i0, i1, i2, i3
+                share = 0.0
+                for k in range(4):
+                    share += w[k] * w[k] * inv_mass[ids[k]]
+                if share == 0.0:
+                    continue
+                touched += 1
+                rel = [0.0, 0.0, 0.0]
+                for k in range(4):
+                    for a in range(3):
+                        rel[a] += w[k] * v[ids[k], a]
+                vn = rel[0] * normal[0] + rel[1] * normal[1] + rel[2] * normal[2]
+                approach = max(0.0, -vn)
+                tangent = (
+                    rel[0] - vn * normal[0],
+                    rel[1] - vn * normal[1],
+                    rel[2] - vn * normal[2],
+                )
+                slide = math.sqrt(_dot(tangent, tangent))
+                limit = friction * approach
+                stop = 1.0 if slide <= limit else limit / slide  # share of the slide removed
+                push = thickness - distance
+                for k in range(4):
+                    i = ids[k]
+                    scale = w[k] * inv_mass[i] / share
+                    if scale == 0.0:
+                        continue
+                    far2 = 0.0
+                    for a in range(3):
+                        dv = approach * normal[a] - stop * tangent[a]
+                        v[i, a] += scale * dv
+                        x[i, a] += scale * (push * normal[a] - dt * stop * tangent[a])
+                        far2 += (x[i, a] - start[i, a]) ** 2
+                    if far2 > reach * reach:
+                        shrink = reach / math.sqrt(far2)
+                        for a in range(3):
+                            x[i, a] = start[i, a] + shrink * (x[i, a] - start[i, a])
+        contacts += touched
+        if touched == 0:
+            break
+    return contacts
+
+
+# -- no crossing ----------------------------------------------------------------------
+
+
+@njit(cache=True)
+def approaches(kind, i0, i1, i2, i3, x0, x1, margin):  # pragma: no cover
+    """Whether the pair's distance along ``x0 -> x1`` may fall below the
+    margin (step 3 of the module docstring). ``False`` is proven; ``True``
+    may be a near miss."""
+    m0 = math.sqrt(
+        _dot(
+            _sub(_at(x0, x1, 1.0, i0), _at(x0, x1, 0.0, i0)),
+            _sub(_at(x0, x1, 1.0, i0), _at(x0, x1, 0.0, i0)),
+        )
+    )
+    m1 = math.sqrt(
+        _dot(
+            _sub(_at(x0, x1, 1.0, i1), _at(x0, x1, 0.0, i1)),
+            _sub(_at(x0, x1, 1.0, i1), _at(x0, x1, 0.0, i1)),
+        )
+    )
+    m2 = math.sqrt(
+        _dot(
+            _sub(_at(x0, x1, 1.0, i2), _at(x0, x1, 0.0, i2)),
+            _sub(_at(x0, x1, 1.0, i2), _at(x0, x1, 0.0, i2)),
+        )
+    )
+    m3 = math.sqrt(
+        _dot(
+            _sub(_at(x0, x1, 1.0, i3), _at(x0, x1, 0.0, i3)),
+            _sub(_at(x0, x1, 1.0, i3), _at(x0, x1, 0.0, i3)),
+        )
+    )
+    # Lipschitz constant of the distance over the step.
+    if kind == 0:
+        lipschitz = m0 + max(m1, max(m2, m3))
+    else:
+        lipschitz = max(m0, m1) + max(m2, m3)
+    _, gap = _closest(kind, i0, i1, i2, i3, x0, x1, 0.0)
+    distance = math.sqrt(_dot(gap, gap))
+    if distance <= 0.0:
+        return True
+    eta = min(margin, 0.5 * distance)
+    s = 0.0
+    for _ in range(MAX_SAMPLES):
+        if distance - lipschitz * (1.0 - s) > 0.5 * eta:
+            return False  # cannot come within eta/2 before the end
+        s += (distance - 0.5 * eta) / lipschitz
+        if s >= 1.0:
+            return False
+        _, gap = _closest(kind, i0, i1, i2, i3, x0, x1, s)
+        distance = math.sqrt(_dot(gap, gap))
+        if distance <= eta:
+            return True
+    return True
+
+
+@njit(cache=True)
+def freeze(vf, ee, triangles, edges, x0, x1, v1, inv_mass, margin):  # pragma: no cover
+    """Send the free points of every approaching pair back to the start of
+    the step, until no pair approaches (step 3 of the module docstring).
+    Returns ``(points frozen, pairs left approaching with nothing to freeze)``."""
+    n_points = x0.shape[0]
+    frozen = np.zeros(n_points, np.bool_)
+    fresh = np.ones(n_points, np.bool_)  # moved since the pair was last checked
+    ids = np.empty(4, np.int64)
+    count = 0
+    unresolved = 0
+    while True:
+        newly = np.zeros(n_points, np.bool_)
+        stuck = 0
+        for kind in range(2):
+            pairs = vf if kind == 0 else ee
+            for n in range(pairs.shape[0]):
+                i0, i1, i2, i3 = _corners(kind, pairs[n], triangles, edges)
+                if not (fresh[i0] or fresh[i1] or fresh[i2] or fresh[i3]):
+                    continue
+                if not approaches(kind, i0, i1, i2, i3, x0, x1, margin):
+                    continue
+                ids[0], ids[1], ids[2], ids[3] = i0, i1, i2, i3
+                mass = 0.0
+                momentum = [0.0, 0.0, 0.0]
+                any_new = False
+                for k in range(4):
+                    i = ids[k]
+                    if inv_mass[i] > 0.0:
+                        mass += 1.0 / inv_mass[i]
+                        for a in range(3):
+                            momentum[a] += v1[i, a] / inv_mass[i]
+                        if not frozen[i]:
+                            any_new = True
+                if not any_new:
+                    stuck += 1
+                    continue
+                for k in range(4):
+                    i = ids[k]
+                    if inv_mass[i] > 0.0:
+                        if not frozen[i]:
+                            frozen[i] = True
+                            newly[i] = True
+                            count += 1
+                        for a in range(3):
+                            x1[i, a] = x0[i, a]
+                            v1[i, a] = momentum[a] / mass
+        unresolved += stuck
+        fresh = newly
+        if not newly.any():
+            break
+    return count, unresolved
