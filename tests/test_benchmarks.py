@@ -48,6 +48,10 @@ RUNS = {
     "memory.py": ([], "memory.md"),
     "newton_peer.py": ([], "newton_peer.md"),
     "render_cost.py": (["--frames", "2", "--sizes", "8"], "render_cost.md"),
+    "self_collision_cost.py": (
+        ["--sizes", "8", "--steps", "2", "--settle", "0.1"],
+        "self_collision_cost.md",
+    ),
     "startup.py": ([], "startup.md"),
     "step_allocations.py": ([], "step_allocations.md"),
     "sweep_scaling.py": ([], "sweep_scaling.md"),

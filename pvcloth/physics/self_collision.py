@@ -41,13 +41,17 @@ One step ``x0 -> x1`` (``x0`` the start, free of intersections)
    check advances by that much (less half the margin ``eta``) until ``s``
    passes 1, and reports an approach when the distance falls below ``eta``
    (a tenth of the thickness, or half the start distance if that is
-   smaller). Reported pairs **freeze**: their free points go back to the
-   start of the step and share their mean velocity (an inelastic impact,
-   Provot 1997's impact zone without rotation). Frozen points changed the
-   paths of their triangles and edges, so the check runs again on the
-   candidates they belong to, until nothing new freezes. The start of the
-   step was free of intersections and a frozen pair does not move, so this
-   ends, at worst with every point frozen at the start.
+   smaller). The free points of reported pairs join an **impact zone**
+   (Provot 1997; Bridson et al. 2002, section 8, here without rotation):
+   the zone moves over the step by its members' mass-weighted mean motion
+   and takes their mean velocity, so its pairs keep the distances they had
+   at the start and momentum is kept. Zones changed the paths of their
+   triangles and edges, so the check runs again on the candidates whose
+   points moved, merging zones that still approach. A zone that still
+   approaches on its own can only be pushed by pinned points; it is held at
+   the start of the step. The start was free of intersections, and zones
+   only grow or become held, so this ends, at worst with the whole cloth
+   one zone.
 
 Why no intersection appears: between two triangles that share no point, an
 intersection can only begin when a corner of one passes through the other or
@@ -55,7 +59,7 @@ an edge of one passes through an edge of the other, while their points move
 on straight lines. Step 3 proves, with a margin, that no such VF or EE pair
 touches during the final motion of the step, so a cloth that started the step
 without intersections ends it without them. The exception is motion imposed
-on pinned points: they cannot be frozen, and a pin driven through the cloth
+on pinned points: they cannot join a zone, and a pin driven through the cloth
 can still push it through (counted in :attr:`Report.unresolved`).
 
 The kernels are compiled with numba when it is installed; without it the
@@ -80,7 +84,7 @@ except ImportError:  # pragma: no cover - exercised only where numba is missing
 
 
 #: Conservative advancement gives up after this many samples of one pair and
-#: reports an approach (a freeze: safe, only less smooth).
+#: reports an approach (an impact zone: safe, only less smooth).
 MAX_SAMPLES = 100
 #: The margin ``eta`` as a share of the thickness.
 MARGIN = 0.1
@@ -114,8 +118,8 @@ class Report:
 
     candidates: int = 0  # VF and EE pairs from the broad phase
     contacts: int = 0  # pairs closer than the thickness that were pushed apart
-    frozen: int = 0  # points sent back to the start of the step
-    unresolved: int = 0  # approaching pairs whose free points were all frozen already
+    zoned: int = 0  # points moved as one with an impact zone
+    unresolved: int = 0  # pairs still approaching with their zone held (pins pushed them)
 
 
 class SelfCollision:
@@ -163,10 +167,10 @@ class SelfCollision:
             vf, ee, self.triangles, self.edges, x0, x1, v1, start, inv_mass,
             d, self.friction, dt, 0.5 * pad, SWEEPS,
         )  # fmt: skip
-        frozen, unresolved = freeze(
+        zoned, unresolved = impact_zones(
             vf, ee, self.triangles, self.edges, x0, x1, v1, inv_mass, MARGIN * d
         )
-        self.report = Report(len(vf) + len(ee), int(contacts), int(frozen), int(unresolved))
+        self.report = Report(len(vf) + len(ee), int(contacts), int(zoned), int(unresolved))
         return self.report
 
     def _pairs(self, lo, hi, kind: int) -> np.ndarray:
@@ -524,35 +528,20 @@ def approaches(kind, i0, i1, i2, i3, x0, x1, margin):  # pragma: no cover
     """Whether the pair's distance along ``x0 -> x1`` may fall below the
     margin (step 3 of the module docstring). ``False`` is proven; ``True``
     may be a near miss."""
-    m0 = math.sqrt(
-        _dot(
-            _sub(_at(x0, x1, 1.0, i0), _at(x0, x1, 0.0, i0)),
-            _sub(_at(x0, x1, 1.0, i0), _at(x0, x1, 0.0, i0)),
-        )
-    )
-    m1 = math.sqrt(
-        _dot(
-            _sub(_at(x0, x1, 1.0, i1), _at(x0, x1, 0.0, i1)),
-            _sub(_at(x0, x1, 1.0, i1), _at(x0, x1, 0.0, i1)),
-        )
-    )
-    m2 = math.sqrt(
-        _dot(
-            _sub(_at(x0, x1, 1.0, i2), _at(x0, x1, 0.0, i2)),
-            _sub(_at(x0, x1, 1.0, i2), _at(x0, x1, 0.0, i2)),
-        )
-    )
-    m3 = math.sqrt(
-        _dot(
-            _sub(_at(x0, x1, 1.0, i3), _at(x0, x1, 0.0, i3)),
-            _sub(_at(x0, x1, 1.0, i3), _at(x0, x1, 0.0, i3)),
-        )
-    )
-    # Lipschitz constant of the distance over the step.
-    if kind == 0:
-        lipschitz = m0 + max(m1, max(m2, m3))
+    # The distance does not change under a common translation, so motions
+    # are taken relative to the first point's: a pair moving together is
+    # cleared at once.
+    d0 = _sub(_at(x0, x1, 1.0, i0), _at(x0, x1, 0.0, i0))
+    r1 = _sub(_sub(_at(x0, x1, 1.0, i1), _at(x0, x1, 0.0, i1)), d0)
+    r2 = _sub(_sub(_at(x0, x1, 1.0, i2), _at(x0, x1, 0.0, i2)), d0)
+    r3 = _sub(_sub(_at(x0, x1, 1.0, i3), _at(x0, x1, 0.0, i3)), d0)
+    m1 = math.sqrt(_dot(r1, r1))
+    m2 = math.sqrt(_dot(r2, r2))
+    m3 = math.sqrt(_dot(r3, r3))
+    if kind == 0:  # Lipschitz constant of the distance over the step
+        lipschitz = max(m1, max(m2, m3))
     else:
-        lipschitz = max(m0, m1) + max(m2, m3)
+        lipschitz = m1 + max(m2, m3)
     _, gap = _closest(kind, i0, i1, i2, i3, x0, x1, 0.0)
     distance = math.sqrt(_dot(gap, gap))
     if distance <= 0.0:
@@ -573,18 +562,32 @@ def approaches(kind, i0, i1, i2, i3, x0, x1, margin):  # pragma: no cover
 
 
 @njit(cache=True)
-def freeze(vf, ee, triangles, edges, x0, x1, v1, inv_mass, margin):  # pragma: no cover
-    """Send the free points of every approaching pair back to the start of
-    the step, until no pair approaches (step 3 of the module docstring).
-    Returns ``(points frozen, pairs left approaching with nothing to freeze)``."""
+def _root(parent, i):  # pragma: no cover
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+@njit(cache=True)
+def impact_zones(vf, ee, triangles, edges, x0, x1, v1, inv_mass, margin):  # pragma: no cover
+    """Join the free points of every approaching pair into a zone that moves
+    as one over the step, until no pair approaches (step 3 of the module
+    docstring); a zone an approach with pinned points still reaches is held
+    at the start of the step. Returns ``(points in zones, pairs left
+    approaching that no zone can clear)``."""
     n_points = x0.shape[0]
-    frozen = np.zeros(n_points, np.bool_)
-    fresh = np.ones(n_points, np.bool_)  # moved since the pair was last checked
-    ids = np.empty(4, np.int64)
-    count = 0
+    parent = np.arange(n_points)
+    zoned = np.zeros(n_points, np.bool_)
+    held = np.zeros(n_points, np.bool_)  # per zone root: stays at the start
+    fresh = np.ones(n_points, np.bool_)  # moved since its pairs were last checked
+    own = x1 - x0  # each point's own motion over the step, before any zone
+    own_v = v1.copy()
+    mass = np.zeros(n_points)
+    sums = np.zeros((n_points, 6))
     unresolved = 0
     while True:
-        newly = np.zeros(n_points, np.bool_)
+        changed = False
         stuck = 0
         for kind in range(2):
             pairs = vf if kind == 0 else ee
@@ -594,33 +597,51 @@ def freeze(vf, ee, triangles, edges, x0, x1, v1, inv_mass, margin):  # pragma: n
                     continue
                 if not approaches(kind, i0, i1, i2, i3, x0, x1, margin):
                     continue
-                ids[0], ids[1], ids[2], ids[3] = i0, i1, i2, i3
-                mass = 0.0
-                momentum = [0.0, 0.0, 0.0]
-                any_new = False
-                for k in range(4):
-                    i = ids[k]
-                    if inv_mass[i] > 0.0:
-                        mass += 1.0 / inv_mass[i]
-                        for a in range(3):
-                            momentum[a] += v1[i, a] / inv_mass[i]
-                        if not frozen[i]:
-                            any_new = True
-                if not any_new:
+                here = False
+                first = -1
+                for i in (i0, i1, i2, i3):
+                    if inv_mass[i] <= 0.0:
+                        continue
+                    if not zoned[i]:
+                        zoned[i] = True
+                        here = True
+                    root = _root(parent, i)
+                    if first < 0:
+                        first = root
+                    elif root != first:
+                        parent[root] = first
+                        held[first] = held[first] or held[root]
+                        here = True
+                if not here and first >= 0 and not held[first]:
+                    held[first] = True  # moving as one did not clear it: pins
+                    here = True
+                if here:
+                    changed = True
+                else:
                     stuck += 1
-                    continue
-                for k in range(4):
-                    i = ids[k]
-                    if inv_mass[i] > 0.0:
-                        if not frozen[i]:
-                            frozen[i] = True
-                            newly[i] = True
-                            count += 1
-                        for a in range(3):
-                            x1[i, a] = x0[i, a]
-                            v1[i, a] = momentum[a] / mass
-        unresolved += stuck
-        fresh = newly
-        if not newly.any():
+        if not changed:
+            unresolved = stuck
             break
-    return count, unresolved
+        # Each zone moves by its members' mass-weighted mean motion and
+        # takes their mean velocity (momentum is kept); a held zone stays.
+        mass[:] = 0.0
+        sums[:] = 0.0
+        for i in range(n_points):
+            if zoned[i]:
+                r = _root(parent, i)
+                m = 1.0 / inv_mass[i]
+                mass[r] += m
+                for a in range(3):
+                    sums[r, a] += m * own[i, a]
+                    sums[r, 3 + a] += m * own_v[i, a]
+        fresh[:] = False
+        for i in range(n_points):
+            if zoned[i]:
+                r = _root(parent, i)
+                for a in range(3):
+                    moved = x0[i, a] + (0.0 if held[r] else sums[r, a] / mass[r])
+                    if moved != x1[i, a]:
+                        fresh[i] = True
+                    x1[i, a] = moved
+                    v1[i, a] = sums[r, 3 + a] / mass[r]
+    return int(zoned.sum()), unresolved
