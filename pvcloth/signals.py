@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import signal
+import sys
 
 
 class Terminated(KeyboardInterrupt):
@@ -60,9 +61,20 @@ def handled():
     global _pending
     _pending = None
     previous = {s: signal.signal(s, _handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    hook = sys.unraisablehook
+
+    def quiet(unraisable):
+        # A signal that lands in a callback Python cannot raise from (an
+        # import lock's weakref callback) is swallowed with a printed
+        # traceback; it stays recorded in _pending and check() raises it.
+        if not isinstance(unraisable.exc_value, KeyboardInterrupt):
+            hook(unraisable)
+
+    sys.unraisablehook = quiet
     try:
         yield
     finally:
+        sys.unraisablehook = hook
         for s, old in previous.items():
             signal.signal(s, old)
         _pending = None

@@ -131,3 +131,26 @@ def test_ctrl_c_stops_a_sweep_quietly_and_the_rerun_finishes_it(tmp_path):
     rerun = subprocess.run(command, capture_output=True, text=True, timeout=300)
     assert rerun.returncode == 0, rerun.stderr
     assert "wrote" in rerun.stdout and "(12 runs)" in rerun.stdout
+
+
+def test_a_signal_python_cannot_raise_is_kept_quietly_for_check(capsys):
+    # As when SIGTERM lands in an import lock's weakref callback: Python hands
+    # the exception to sys.unraisablehook instead of raising it.
+    import sys
+    import types
+
+    from pvcloth import signals
+
+    with signals.handled():
+        try:
+            signals._handler(signal.SIGTERM, None)
+        except signals.Terminated as error:
+            sys.unraisablehook(
+                types.SimpleNamespace(
+                    exc_type=type(error), exc_value=error, exc_traceback=None,
+                    err_msg=None, object=None,
+                )
+            )  # fmt: skip
+        assert capsys.readouterr().err == ""
+        with pytest.raises(signals.Terminated):
+            signals.check()
