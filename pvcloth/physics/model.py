@@ -23,7 +23,7 @@ from pvcloth.physics.kernels import (
     spring_projection,
     spring_projection_numpy,
 )
-from pvcloth.physics.obstacles import build_obstacle
+from pvcloth.physics.obstacles import Contacts, build_obstacle
 from pvcloth.physics.self_collision import SelfCollision
 from pvcloth.physics.springs import Springs, SpringTable
 
@@ -172,17 +172,19 @@ class Model:
         if self.wind is not None:
             self.wind.set_time(t)
 
-    def collide(self, x0, x1, v1, movable, t0: float, t1: float) -> int:
+    def collide(self, x0, x1, v1, movable, t0: float, t1: float) -> list[Contacts]:
         """Resolve collisions of the step ``t0 -> t1`` in place on ``x1``, ``v1``
-        for the ``movable`` point indices; returns how many points touched."""
-        touched = 0
+        for the ``movable`` point indices; returns the points that touched
+        and their obstacle's normals, one :class:`Contacts` per obstacle that
+        may have been reached."""
+        touched = []
         # A cube around everything that moved: flat reductions are ten times
         # cheaper than per-axis ones, and this only has to be conservative.
         low = np.full(3, min(x0.min(), x1.min()))
         high = np.full(3, max(x0.max(), x1.max()))
         for obstacle in self.obstacles:
             if obstacle.may_touch(low, high, t0, t1):
-                touched += obstacle.collide(x0, x1, v1, movable, t0, t1).index.size
+                touched.append(obstacle.collide(x0, x1, v1, movable, t0, t1))
         return touched
 
     def potential_energy(self, x: np.ndarray) -> float:

@@ -13,45 +13,62 @@ corner of (*VF*), and between two edges that share no point (*EE*).
 
 One step ``x0 -> x1`` (``x0`` the start, free of intersections)
 -----------------------------------------------------------------
-1. **Candidates** (broad phase, :func:`box_pairs`): every point's box holds
-   its start and end, grown by ``pad``; a triangle's or an edge's box is the
-   union of its points' boxes. Boxes are hashed into a uniform grid of cells
-   and each pair that overlaps is found once (reported only from the cell
-   holding the lower corner of the overlap). No O(N^2) pass.
-2. **Proximity** (Bridson, Fedkiw and Anderson 2002, "Robust treatment of
+1. **Pair list** (broad phase, a Verlet list as in molecular dynamics):
+   each point gets a box holding its path over the step, grown by the
+   response's ``reach`` and a skin; every VF and EE pair whose points'
+   boxes come within ``thickness`` of each other is listed, found through a
+   uniform hash grid (:func:`box_pairs`; each overlap found once, from the
+   cell holding its lower corner; no O(N^2) pass). Boxes are convex, so
+   while each point's start and end (with its reach) stay in its box
+   (:func:`inside`), so does everything the step does to it, and an
+   unlisted pair stays at least ``thickness`` apart. A step that leaves a
+   box lists again; a cloth at rest keeps its list for many steps.
+2. **Screen** (:func:`screen`): a listed pair can change its distance
+   from the *anchor* (the start of the step that built the list) by at
+   most the largest motion of its other points relative to its first one
+   (for a point and a triangle; for two edges the first edge's other end
+   adds its own), which :func:`_relative` bounds by the start's offset from
+   the anchor, the step's relative motion and twice ``reach``. Only pairs
+   this bound lets within ``thickness`` go on; a pair of points of one
+   flat layer moves together and is screened out.
+3. **Proximity** (Bridson, Fedkiw and Anderson 2002, "Robust treatment of
    collisions, contact and friction for cloth animation", sections 7.1-7.3):
-   each candidate closer than ``thickness`` at the end of the step is pushed
+   each pair closer than ``thickness`` at the end of the step is pushed
    apart along the line of its closest points to the thickness (a position
    projection, which adds no velocity and so no bounce), its approaching
    relative velocity is removed (inelastic), and Coulomb friction with
    ``friction`` times that normal change holds or slows its sliding. The
    push is shared by the inverse masses and the closest point's barycentric
    weights, so pinned points do not move and momentum is kept. No point is
-   moved more than ``pad / 2`` from where the step put it, which keeps every
-   path inside the boxes of step 1.
-3. **No crossing** (continuous, :func:`approaches`): for every candidate the
-   distance between its two primitives along the step's straight-line motion
-   ``x0 + s (x1 - x0)``, ``s`` in ``[0, 1]``, is bounded from below by
-   conservative advancement. The distance is Lipschitz in ``s``: for a
-   point and a triangle it changes by at most ``L = |dp| + max |da|`` per unit
-   ``s`` (the closest point of the triangle, held at its barycentric
-   weights, moves by at most its farthest corner's motion ``da``); for two
-   edges by at most ``max |dp_1| + max |dp_2|`` over their ends. So after a
-   distance ``d`` at ``s``, no contact can occur before ``s + d / L``; the
-   check advances by that much (less half the margin ``eta``) until ``s``
-   passes 1, and reports an approach when the distance falls below ``eta``
-   (a tenth of the thickness, or half the start distance if that is
-   smaller). The free points of reported pairs join an **impact zone**
-   (Provot 1997; Bridson et al. 2002, section 8, here without rotation):
-   the zone moves over the step by its members' mass-weighted mean motion
-   and takes their mean velocity, so its pairs keep the distances they had
-   at the start and momentum is kept. Zones changed the paths of their
-   triangles and edges, so the check runs again on the candidates whose
-   points moved, merging zones that still approach. A zone that still
-   approaches on its own can only be pushed by pinned points; it is held at
-   the start of the step. The start was free of intersections, and zones
-   only grow or become held, so this ends, at worst with the whole cloth
-   one zone.
+   moved more than ``reach`` (half the thickness) from where the step put
+   it, as steps 1 and 2 assumed.
+4. **No crossing** (continuous, :func:`approaches`): for every pair the
+   screen kept, the distance between its two primitives along the step's
+   straight-line motion ``x0 + s (x1 - x0)``, ``s`` in ``[0, 1]``, is
+   bounded from below by conservative advancement. The distance is
+   Lipschitz in ``s``: for a point and a triangle it changes by at most
+   ``L = max |da - dp|`` per unit ``s`` (the closest point of the
+   triangle, held at its barycentric weights, moves relative to the point
+   by at most its farthest corner's relative motion); for two edges by at
+   most ``|dq - dp| + max |da - dp|``. So after a distance ``d`` at ``s``,
+   no contact can occur before ``s + d / L``; the check advances by that
+   much (less half the margin ``eta``) until ``s`` passes 1, and reports an
+   approach when the distance falls below ``eta`` (a tenth of the
+   thickness, or half the start distance if that is smaller). The free
+   points of reported pairs join an **impact zone** (Provot 1997; Bridson
+   et al. 2002, section 8, here without rotation): the zone moves over the
+   step by its members' mass-weighted mean motion and takes their mean
+   velocity, so its pairs keep the distances they had at the start and
+   momentum is kept. Zones changed the paths of their triangles and edges,
+   so the check runs again on every listed pair with a point that moved,
+   merging zones that still approach; if a zone carried points past the
+   list's skin, the list is built again around the new paths and every
+   listed pair checked. A zone that still approaches on its own can only
+   be pushed by a pinned point of one of its pairs; it then moves with that
+   pin (a translation, which keeps its distances to the pin), and if a
+   second pin drives into it as well, it is held at the start of the step.
+   The start was free of intersections, and zones only grow, follow a pin
+   or become held, so this ends, at worst with the whole cloth one zone.
 
 Why no intersection appears: between two triangles that share no point, an
 intersection can only begin when a corner of one passes through the other or
@@ -59,8 +76,9 @@ an edge of one passes through an edge of the other, while their points move
 on straight lines. Step 3 proves, with a margin, that no such VF or EE pair
 touches during the final motion of the step, so a cloth that started the step
 without intersections ends it without them. The exception is motion imposed
-on pinned points: they cannot join a zone, and a pin driven through the cloth
-can still push it through (counted in :attr:`Report.unresolved`).
+on pinned points: they cannot join a zone, and a zone that two pins moving
+differently both drive into is held, so those pins can still push the cloth
+through (counted in :attr:`Report.unresolved`).
 
 The kernels are compiled with numba when it is installed; without it the
 same functions run as plain Python (correct, and slow).
@@ -90,6 +108,9 @@ MAX_SAMPLES = 100
 MARGIN = 0.1
 #: Gauss-Seidel sweeps of the proximity response over the candidates.
 SWEEPS = 3
+#: How far (as a share of the thickness) a point may stray beyond its
+#: step's path and reach before the pair list is built again (step 1).
+SKIN = 0.5
 
 
 def grid_triangles(shape: tuple[int, int]) -> np.ndarray:
@@ -116,10 +137,12 @@ def grid_edges(shape: tuple[int, int]) -> np.ndarray:
 class Report:
     """What the self-collision of one step did (counts of pairs and points)."""
 
-    candidates: int = 0  # VF and EE pairs from the broad phase
-    contacts: int = 0  # pairs closer than the thickness that were pushed apart
+    candidates: int = 0  # VF and EE pairs in the pair list (step 1)
+    near: int = 0  # of those, pairs the step's motion may bring into contact (step 2)
+    contacts: int = 0  # pair pushes of the proximity response, summed over its sweeps
     zoned: int = 0  # points moved as one with an impact zone
     unresolved: int = 0  # pairs still approaching with their zone held (pins pushed them)
+    rebuilt: bool = False  # whether this step built a new pair list
 
 
 class SelfCollision:
@@ -138,6 +161,8 @@ class SelfCollision:
     ----------
     triangles : ndarray of int, shape (T, 3)
     edges : ndarray of int, shape (E, 2)
+    reach : float
+        How far (m) the proximity response may move a point in one step.
     report : Report
         What the last :meth:`resolve` did.
     """
@@ -146,34 +171,81 @@ class SelfCollision:
         self.shape = tuple(shape)
         self.thickness = float(thickness)
         self.friction = float(friction)
+        self.reach = 0.5 * self.thickness
         self.triangles = grid_triangles(self.shape)
         self.edges = grid_edges(self.shape)
         self.report = Report()
+        self._anchor: np.ndarray | None = None  # (N, 3) m: where the list was built
+        self._low = np.empty((0, 3))  # (N, 3) m: the box each point must stay in
+        self._high = np.empty((0, 3))
+        self._rows = np.empty((0, 3), np.int64)  # the pair list: (kind, first, second)
+        self._gaps = np.empty(0)  # (P,) m: each listed pair's distance at the anchor
         self._capacity = 1 << 16
 
-    def resolve(self, x0: np.ndarray, x1: np.ndarray, v1: np.ndarray, inv_mass, dt: float):
+    def resolve(
+        self, x0: np.ndarray, x1: np.ndarray, v1: np.ndarray, inv_mass, dt: float, resting=()
+    ):
         """Make the step ``x0 -> x1`` free of self-intersection, in place on
         ``x1`` (m) and ``v1`` (m/s), both ``(N, 3)``; ``inv_mass`` ``(N,)``
-        (1/kg, zero for pinned points) says who may move. Returns the
-        :class:`Report`."""
-        d = self.thickness
-        pad = d  # boxes grow by d/2 for proximity and d/2 for the push
-        lo = np.minimum(x0, x1) - pad
-        hi = np.maximum(x0, x1) + pad
-        vf = self._pairs(lo, hi, 0)
-        ee = self._pairs(lo, hi, 1)
+        (1/kg, zero for pinned points) says who may move. ``resting`` are the
+        obstacles' :class:`~pvcloth.physics.obstacles.Contacts` of this step:
+        the proximity response does not push those points into their
+        obstacle (a layer lying on them would, and the next step's contact
+        push them back, so a folded cloth on the ground would never come to
+        rest). Returns the :class:`Report`."""
+        d, reach = self.thickness, self.reach
+        rebuilt = self._anchor is None or not inside(self._low, self._high, x0, x1, reach)
+        if rebuilt:
+            self._build(x0, x1, reach)
+        rows = self._rows
+        near = screen(rows, self._gaps, self._anchor, x0, x1, self.triangles, self.edges, reach, d)
         start = x1.copy()
+        floor = np.zeros_like(x1)  # per point: its obstacle's outward normal, or zero
+        for contact in resting:
+            floor[contact.index] = contact.normal
         contacts = respond(
-            vf, ee, self.triangles, self.edges, x0, x1, v1, start, inv_mass,
-            d, self.friction, dt, 0.5 * pad, SWEEPS,
+            rows, near, self.triangles, self.edges, x0, x1, v1, start, inv_mass, floor,
+            d, self.friction, dt, reach, SWEEPS,
         )  # fmt: skip
         zoned, unresolved = impact_zones(
-            vf, ee, self.triangles, self.edges, x0, x1, v1, inv_mass, MARGIN * d
+            rows, near, self.triangles, self.edges, x0, x1, v1, inv_mass, MARGIN * d
         )
-        self.report = Report(len(vf) + len(ee), int(contacts), int(zoned), int(unresolved))
+        while zoned and not inside(self._low, self._high, x0, x1, 0.0):
+            # A zone carried points past the list's skin: list again around
+            # the zoned motion, and check every listed pair once more.
+            self._build(x0, x1, 0.0)
+            rebuilt = True
+            rows = self._rows
+            everything = np.arange(len(rows))
+            zoned, unresolved = impact_zones(
+                rows, everything, self.triangles, self.edges, x0, x1, v1, inv_mass, MARGIN * d
+            )
+        self.report = Report(
+            len(rows), len(near), int(contacts), int(zoned), int(unresolved), rebuilt
+        )
         return self.report
 
-    def _pairs(self, lo, hi, kind: int) -> np.ndarray:
+    def _build(self, x0: np.ndarray, x1: np.ndarray, reach: float) -> None:
+        """List every pair whose points' boxes come within ``thickness``:
+        each box holds the point's step ``x0 -> x1`` grown by ``reach`` and
+        the skin; ``x0`` is the anchor of the screen."""
+        grow = reach + SKIN * self.thickness
+        self._low = np.minimum(x0, x1) - grow
+        self._high = np.maximum(x0, x1) + grow
+        half = 0.5 * self.thickness
+        lo, hi = self._low - half, self._high + half
+        vf, ee = self._box_pairs(lo, hi, 0), self._box_pairs(lo, hi, 1)
+        rows = np.empty((len(vf) + len(ee), 3), np.int64)
+        rows[: len(vf), 0], rows[len(vf) :, 0] = 0, 1
+        rows[: len(vf), 1:], rows[len(vf) :, 1:] = vf, ee
+        # One order whatever the list's history: the response sweeps pairs in
+        # this order, so a resumed run repeats a continuous one bit for bit.
+        rows = rows[np.lexsort((rows[:, 2], rows[:, 1], rows[:, 0]))]
+        self._anchor = x0.copy()
+        self._rows = rows
+        self._gaps = pair_distances(rows, self.triangles, self.edges, self._anchor)
+
+    def _box_pairs(self, lo, hi, kind: int) -> np.ndarray:
         items = self.triangles if kind == 0 else self.edges
         item_lo, item_hi = item_boxes(lo, hi, items)
         query_lo, query_hi = (lo, hi) if kind == 0 else (item_lo, item_hi)
@@ -188,6 +260,65 @@ class SelfCollision:
             if n <= self._capacity:
                 return out[:n]
             self._capacity = int(1.5 * n)
+
+
+# -- the pair list and its screen -------------------------------------------------
+
+
+@njit(cache=True)
+def inside(low, high, x0, x1, reach):  # pragma: no cover
+    """Whether every point's ``x0`` and its ``x1`` grown by ``reach`` lie in
+    its box ``low``-``high`` (N, 3) (step 1 of the module docstring)."""
+    for i in range(low.shape[0]):
+        for a in range(3):
+            if x0[i, a] < low[i, a] or x0[i, a] > high[i, a]:
+                return False
+            if x1[i, a] - reach < low[i, a] or x1[i, a] + reach > high[i, a]:
+                return False
+    return True
+
+
+@njit(cache=True)
+def pair_distances(rows, triangles, edges, x):  # pragma: no cover
+    """Distance (m) between the two primitives of every pair at ``x``."""
+    gaps = np.empty(rows.shape[0])
+    for n in range(rows.shape[0]):
+        kind = rows[n, 0]
+        i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
+        _, gap = _closest(kind, i0, i1, i2, i3, x, x, 0.0)
+        gaps[n] = math.sqrt(_dot(gap, gap))
+    return gaps
+
+
+@njit(cache=True, inline="always")
+def _relative(anchor, x0, x1, k, ref, reach):  # pragma: no cover
+    """Bound on how far point ``k`` moves relative to point ``ref`` from
+    the anchor, over the step and its response."""
+    start = 0.0
+    motion = 0.0
+    for a in range(3):
+        start += (x0[k, a] - anchor[k, a] - x0[ref, a] + anchor[ref, a]) ** 2
+        motion += (x1[k, a] - x0[k, a] - x1[ref, a] + x0[ref, a]) ** 2
+    return math.sqrt(start) + math.sqrt(motion) + 2.0 * reach
+
+
+@njit(cache=True)
+def screen(rows, gaps, anchor, x0, x1, triangles, edges, reach, thickness):  # pragma: no cover
+    """Indices of the listed pairs that may come within ``thickness``
+    during the step or its response (step 2 of the module docstring)."""
+    near = np.empty(rows.shape[0], np.int64)
+    count = 0
+    for n in range(rows.shape[0]):
+        kind = rows[n, 0]
+        i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
+        r1 = _relative(anchor, x0, x1, i1, i0, reach)
+        r2 = _relative(anchor, x0, x1, i2, i0, reach)
+        r3 = _relative(anchor, x0, x1, i3, i0, reach)
+        bound = max(r1, max(r2, r3)) if kind == 0 else r1 + max(r2, r3)
+        if gaps[n] - bound < thickness:
+            near[count] = n
+            count += 1
+    return near[:count]
 
 
 # -- broad phase ---------------------------------------------------------------
@@ -420,13 +551,12 @@ def segment_segment(p1, q1, p2, q2):  # pragma: no cover
 
 
 @njit(cache=True, inline="always")
-def _corners(kind, pair, triangles, edges):  # pragma: no cover
-    """The four points of a VF (kind 0: the point, then the triangle's) or
-    EE (kind 1: the first edge's, then the second's) pair."""
+def _corners(kind, first, second, triangles, edges):  # pragma: no cover
+    """The four points of a VF (kind 0: point ``first``, then triangle
+    ``second``'s) or EE (kind 1: edge ``first``'s, then edge ``second``'s) pair."""
     if kind == 0:
-        tri = triangles[pair[1]]
-        return pair[0], tri[0], tri[1], tri[2]
-    return edges[pair[0], 0], edges[pair[0], 1], edges[pair[1], 0], edges[pair[1], 1]
+        return first, triangles[second, 0], triangles[second, 1], triangles[second, 2]
+    return edges[first, 0], edges[first, 1], edges[second, 0], edges[second, 1]
 
 
 @njit(cache=True)
@@ -454,66 +584,80 @@ def _closest(kind, i0, i1, i2, i3, x0, x1, s):  # pragma: no cover
 
 @njit(cache=True)
 def respond(
-    vf, ee, triangles, edges, x0, x, v, start, inv_mass, thickness, friction, dt, reach, sweeps
-):  # pragma: no cover
-    """Push every pair closer than ``thickness`` apart, in place on ``x`` and
-    ``v`` (step 2 of the module docstring); no point ends farther than
-    ``reach`` from ``start``. Returns how many pair contacts were handled."""
+    rows, near, triangles, edges, x0, x, v, start, inv_mass, floor,
+    thickness, friction, dt, reach, sweeps,
+):  # fmt: skip  # pragma: no cover
+    """Push every pair ``rows[near]`` closer than ``thickness`` apart, in
+    place on ``x`` and ``v`` (step 3 of the module docstring); no point ends
+    farther than ``reach`` from ``start``, and none is pushed into the
+    obstacle whose outward normal ``floor`` holds for it (zero: none).
+    Returns how many pair pushes there were, summed over the sweeps."""
     ids = np.empty(4, np.int64)
+    free = np.empty(4)
     contacts = 0
     for _ in range(sweeps):
         touched = 0
-        for kind in range(2):
-            pairs = vf if kind == 0 else ee
-            for n in range(pairs.shape[0]):
-                i0, i1, i2, i3 = _corners(kind, pairs[n], triangles, edges)
-                w, gap = _closest(kind, i0, i1, i2, i3, x, x, 0.0)
+        for n in near:
+            kind = rows[n, 0]
+            i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
+            w, gap = _closest(kind, i0, i1, i2, i3, x, x, 0.0)
+            distance = math.sqrt(_dot(gap, gap))
+            if distance >= thickness:
+                continue
+            if distance <= 1e-9 * thickness:  # touching: the side they came from
+                _, gap = _closest(kind, i0, i1, i2, i3, x0, x0, 0.0)
                 distance = math.sqrt(_dot(gap, gap))
-                if distance >= thickness:
+                if distance == 0.0:
                     continue
-                if distance <= 1e-9 * thickness:  # touching: the side they came from
-                    _, gap = _closest(kind, i0, i1, i2, i3, x0, x0, 0.0)
-                    distance = math.sqrt(_dot(gap, gap))
-                    if distance == 0.0:
-                        continue
-                normal = (gap[0] / distance, gap[1] / distance, gap[2] / distance)
-                ids[0], ids[1], ids[2], ids[3] = i0, i1, i2, i3
-                share = 0.0
-                for k in range(4):
-                    share += w[k] * w[k] * inv_mass[ids[k]]
-                if share == 0.0:
-                    continue
-                touched += 1
-                rel = [0.0, 0.0, 0.0]
-                for k in range(4):
-                    for a in range(3):
-                        rel[a] += w[k] * v[ids[k], a]
-                vn = rel[0] * normal[0] + rel[1] * normal[1] + rel[2] * normal[2]
-                approach = max(0.0, -vn)
-                tangent = (
-                    rel[0] - vn * normal[0],
-                    rel[1] - vn * normal[1],
-                    rel[2] - vn * normal[2],
+            normal = (gap[0] / distance, gap[1] / distance, gap[2] / distance)
+            ids[0], ids[1], ids[2], ids[3] = i0, i1, i2, i3
+            share = 0.0
+            for k in range(4):
+                i = ids[k]
+                into = w[k] * (
+                    normal[0] * floor[i, 0] + normal[1] * floor[i, 1] + normal[2] * floor[i, 2]
                 )
-                slide = math.sqrt(_dot(tangent, tangent))
-                limit = friction * approach
-                stop = 1.0 if slide <= limit else limit / slide  # share of the slide removed
-                push = thickness - distance
-                for k in range(4):
-                    i = ids[k]
-                    scale = w[k] * inv_mass[i] / share
-                    if scale == 0.0:
-                        continue
-                    far2 = 0.0
+                # Pushed into its obstacle (more than ~6 degrees off the
+                # surface): held like a pin for this pair.
+                free[k] = 0.0 if into < -0.1 else inv_mass[i]
+                share += w[k] * w[k] * free[k]
+            if share == 0.0:
+                continue
+            touched += 1
+            rel = [0.0, 0.0, 0.0]
+            for k in range(4):
+                for a in range(3):
+                    rel[a] += w[k] * v[ids[k], a]
+            vn = rel[0] * normal[0] + rel[1] * normal[1] + rel[2] * normal[2]
+            approach = max(0.0, -vn)
+            tangent = (
+                rel[0] - vn * normal[0],
+                rel[1] - vn * normal[1],
+                rel[2] - vn * normal[2],
+            )
+            slide = math.sqrt(_dot(tangent, tangent))
+            limit = friction * approach
+            stop = 1.0 if slide <= limit else limit / slide  # share of the slide removed
+            push = thickness - distance
+            for k in range(4):
+                i = ids[k]
+                scale = w[k] * free[k] / share
+                if scale == 0.0:
+                    continue
+                # A corner that moves the contact point only a little (a small
+                # weight, the others pinned) would need a large change: no
+                # point changes by more than the pair's whole push.
+                scale = max(-1.0, min(1.0, scale))
+                far2 = 0.0
+                for a in range(3):
+                    dv = approach * normal[a] - stop * tangent[a]
+                    v[i, a] += scale * dv
+                    x[i, a] += scale * (push * normal[a] - dt * stop * tangent[a])
+                    far2 += (x[i, a] - start[i, a]) ** 2
+                if far2 > reach * reach:
+                    shrink = reach / math.sqrt(far2)
                     for a in range(3):
-                        dv = approach * normal[a] - stop * tangent[a]
-                        v[i, a] += scale * dv
-                        x[i, a] += scale * (push * normal[a] - dt * stop * tangent[a])
-                        far2 += (x[i, a] - start[i, a]) ** 2
-                    if far2 > reach * reach:
-                        shrink = reach / math.sqrt(far2)
-                        for a in range(3):
-                            x[i, a] = start[i, a] + shrink * (x[i, a] - start[i, a])
+                        x[i, a] = start[i, a] + shrink * (x[i, a] - start[i, a])
         contacts += touched
         if touched == 0:
             break
@@ -526,15 +670,15 @@ def respond(
 @njit(cache=True)
 def approaches(kind, i0, i1, i2, i3, x0, x1, margin):  # pragma: no cover
     """Whether the pair's distance along ``x0 -> x1`` may fall below the
-    margin (step 3 of the module docstring). ``False`` is proven; ``True``
+    margin (step 4 of the module docstring). ``False`` is proven; ``True``
     may be a near miss."""
     # The distance does not change under a common translation, so motions
     # are taken relative to the first point's: a pair moving together is
     # cleared at once.
-    d0 = _sub(_at(x0, x1, 1.0, i0), _at(x0, x1, 0.0, i0))
-    r1 = _sub(_sub(_at(x0, x1, 1.0, i1), _at(x0, x1, 0.0, i1)), d0)
-    r2 = _sub(_sub(_at(x0, x1, 1.0, i2), _at(x0, x1, 0.0, i2)), d0)
-    r3 = _sub(_sub(_at(x0, x1, 1.0, i3), _at(x0, x1, 0.0, i3)), d0)
+    d0 = _sub(x1[i0], x0[i0])
+    r1 = _sub(_sub(x1[i1], x0[i1]), d0)
+    r2 = _sub(_sub(x1[i2], x0[i2]), d0)
+    r3 = _sub(_sub(x1[i3], x0[i3]), d0)
     m1 = math.sqrt(_dot(r1, r1))
     m2 = math.sqrt(_dot(r2, r2))
     m3 = math.sqrt(_dot(r3, r3))
@@ -570,60 +714,86 @@ def _root(parent, i):  # pragma: no cover
 
 
 @njit(cache=True)
-def impact_zones(vf, ee, triangles, edges, x0, x1, v1, inv_mass, margin):  # pragma: no cover
+def impact_zones(rows, near, triangles, edges, x0, x1, v1, inv_mass, margin):  # pragma: no cover
     """Join the free points of every approaching pair into a zone that moves
-    as one over the step, until no pair approaches (step 3 of the module
+    as one over the step, until no pair approaches (step 4 of the module
     docstring); a zone an approach with pinned points still reaches is held
-    at the start of the step. Returns ``(points in zones, pairs left
-    approaching that no zone can clear)``."""
+    at the start of the step. The first pass checks the pairs ``rows[near]``,
+    later ones every listed pair with a point the zones moved. Returns
+    ``(points in zones, pairs left approaching that no zone can clear)``."""
     n_points = x0.shape[0]
     parent = np.arange(n_points)
     zoned = np.zeros(n_points, np.bool_)
     held = np.zeros(n_points, np.bool_)  # per zone root: stays at the start
+    dirty = np.zeros(n_points, np.bool_)  # per zone root: grew in this pass, not yet moved
+    follow = np.full(n_points, -1)  # per zone root: the pinned point it moves with
     fresh = np.ones(n_points, np.bool_)  # moved since its pairs were last checked
     own = x1 - x0  # each point's own motion over the step, before any zone
     own_v = v1.copy()
     mass = np.zeros(n_points)
     sums = np.zeros((n_points, 6))
     unresolved = 0
+    checked = near
     while True:
         changed = False
         stuck = 0
-        for kind in range(2):
-            pairs = vf if kind == 0 else ee
-            for n in range(pairs.shape[0]):
-                i0, i1, i2, i3 = _corners(kind, pairs[n], triangles, edges)
-                if not (fresh[i0] or fresh[i1] or fresh[i2] or fresh[i3]):
+        for n in checked:
+            kind = rows[n, 0]
+            i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
+            if not (fresh[i0] or fresh[i1] or fresh[i2] or fresh[i3]):
+                continue
+            if not approaches(kind, i0, i1, i2, i3, x0, x1, margin):
+                continue
+            here = False
+            first = -1
+            for i in (i0, i1, i2, i3):
+                if inv_mass[i] <= 0.0:
                     continue
-                if not approaches(kind, i0, i1, i2, i3, x0, x1, margin):
-                    continue
-                here = False
-                first = -1
-                for i in (i0, i1, i2, i3):
-                    if inv_mass[i] <= 0.0:
-                        continue
-                    if not zoned[i]:
-                        zoned[i] = True
-                        here = True
-                    root = _root(parent, i)
-                    if first < 0:
-                        first = root
-                    elif root != first:
-                        parent[root] = first
-                        held[first] = held[first] or held[root]
-                        here = True
-                if not here and first >= 0 and not held[first]:
-                    held[first] = True  # moving as one did not clear it: pins
+                root = _root(parent, i)
+                if not zoned[i]:
+                    zoned[i] = True
+                    dirty[root] = True
                     here = True
-                if here:
-                    changed = True
-                else:
-                    stuck += 1
+                if first < 0:
+                    first = root
+                elif root != first:
+                    parent[root] = first
+                    held[first] = held[first] or held[root]
+                    if follow[first] < 0:
+                        follow[first] = follow[root]
+                    elif follow[root] >= 0 and follow[root] != follow[first]:
+                        held[first] = True  # two pins pull it: it cannot follow both
+                    dirty[first] = True
+                    here = True
+            if not here and first >= 0:
+                if dirty[first]:
+                    here = True  # its zone moves as one from the next pass on
+                elif not held[first]:
+                    # Moving as one did not clear it: a pinned point of the
+                    # pair drives into the zone. The zone first moves with
+                    # that pin (its distances to it are then kept); if that
+                    # fails too, it stays where it started.
+                    pin = -1
+                    for i in (i0, i1, i2, i3):
+                        if inv_mass[i] <= 0.0:
+                            pin = i
+                            break
+                    if pin >= 0 and follow[first] < 0:
+                        follow[first] = pin
+                    else:
+                        held[first] = True
+                    dirty[first] = True  # its pairs are checked again once it moved
+                    here = True
+            if here:
+                changed = True
+            else:
+                stuck += 1
         if not changed:
             unresolved = stuck
             break
         # Each zone moves by its members' mass-weighted mean motion and
-        # takes their mean velocity (momentum is kept); a held zone stays.
+        # takes their mean velocity (momentum is kept); a zone a pin drove
+        # into moves with that pin; a held zone stays where it started, at rest.
         mass[:] = 0.0
         sums[:] = 0.0
         for i in range(n_points):
@@ -638,10 +808,19 @@ def impact_zones(vf, ee, triangles, edges, x0, x1, v1, inv_mass, margin):  # pra
         for i in range(n_points):
             if zoned[i]:
                 r = _root(parent, i)
+                f = follow[r]
                 for a in range(3):
-                    moved = x0[i, a] + (0.0 if held[r] else sums[r, a] / mass[r])
-                    if moved != x1[i, a]:
+                    if held[r]:
+                        motion, velocity = 0.0, 0.0
+                    elif f >= 0:
+                        motion, velocity = x1[f, a] - x0[f, a], v1[f, a]
+                    else:
+                        motion, velocity = sums[r, a] / mass[r], sums[r, 3 + a] / mass[r]
+                    moved = x0[i, a] + motion
+                    if moved != x1[i, a] or dirty[r]:
                         fresh[i] = True
                     x1[i, a] = moved
-                    v1[i, a] = sums[r, 3 + a] / mass[r]
+                    v1[i, a] = velocity
+        dirty[:] = False
+        checked = np.arange(rows.shape[0])
     return int(zoned.sum()), unresolved

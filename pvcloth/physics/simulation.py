@@ -919,13 +919,16 @@ class Simulation:
                 new.t = state.t + dt
             else:
                 new.t = (self.steps + 1) * dt if self._uniform_clock(state) else state.t + dt
+            touched = ()
             if model.obstacles:
-                model.collide(state.x, new.x, new.v, self.control.movable_index, state.t, new.t)
+                touched = model.collide(
+                    state.x, new.x, new.v, self.control.movable_index, state.t, new.t
+                )
         new.x[pinned] = pin_positions
         new.v[pinned] = pin_velocity
         if model.self_collision is not None:
             # After the pins land: they move as they are told, the rest keeps clear.
-            model.self_collision.resolve(state.x, new.x, new.v, self.control.inv_mass, dt)
+            model.self_collision.resolve(state.x, new.x, new.v, self.control.inv_mass, dt, touched)
         if new.checked is not None and not model.obstacles and model.self_collision is None:
             speed, finite = new.checked  # pinned points included (their v is set above)
             speed = speed if finite else math.inf

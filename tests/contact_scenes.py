@@ -1,0 +1,84 @@
+"""Scenes where a cloth meets itself, for the self-collision tests: each is
+a scene and, where the scene alone cannot say it, a driver that moves pins
+before every step (the way a script or the window's mouse does)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from conftest import ROOT
+from pvcloth import SelfCollisionSpec, Simulation, load_scene
+
+SCENES = ROOT / "data" / "scenes"
+
+
+def _with_contact(scene, n: int, integrator: str, contact: bool):
+    scene = scene.with_resolution(n).with_overrides(
+        {"solver.integrator": integrator, "solver.dt": None}
+    )
+    return scene.replace(self_collision=SelfCollisionSpec() if contact else None)
+
+
+def crumple(n: int, integrator: str, contact: bool = True):
+    """The bundled crumple: a long cloth dropped edge-on from 0.3 m buckles
+    and piles onto itself on the ground."""
+    scene = load_scene(SCENES / "crumple.toml")
+    return Simulation(_with_contact(scene, n, integrator, contact)), None
+
+
+def sphere_drape(n: int, integrator: str, contact: bool = True):
+    """The bundled drape over a ball with a cloth twice as wide: its skirt
+    reaches the floor and the corners fold onto it."""
+    scene = load_scene(SCENES / "drape_sphere.toml").with_overrides({"cloth.size": [2.4, 2.4]})
+    return Simulation(_with_contact(scene, n, integrator, contact)), None
+
+
+def corner_drag(n: int, integrator: str, contact: bool = True):
+    """A cloth lying on the floor; one corner is grabbed and dragged over
+    the cloth to the opposite corner at about 3 m/s, 5 cm up."""
+    scene = load_scene(SCENES / "ground.toml").with_overrides(
+        {"cloth.center": [0.0, 0.0, 0.01], "pins.corners": []}
+    )
+    sim = Simulation(_with_contact(scene, n, integrator, contact))
+    nx, ny = sim.resolution
+    corner = (0, 0)
+    start = sim.positions[sim.point_index(corner)].copy()
+    end = sim.positions[sim.point_index((nx - 1, ny - 1))] + [0.0, 0.0, 0.05]
+    sim.pin(corner)
+
+    def drive(sim):
+        share = min(sim.state.t / 0.5, 1.0)
+        lift = 0.05 * min(share / 0.2, 1.0)
+        sim.move_pin(corner, start + share * (end - start) + [0.0, 0.0, lift])
+
+    return sim, drive
+
+
+def twist(n: int, integrator: str, contact: bool = True):
+    """A hanging cloth held by its four corners; the top two turn about the
+    vertical axis through its middle, one and a half turns in 1.5 s, so
+    the cloth winds onto itself."""
+    scene = load_scene(SCENES / "hanging.toml").with_overrides(
+        {
+            "cloth.orientation": "vertical",
+            "cloth.center": [0.0, 0.0, 1.0],
+            "pins.corners": ["top-left", "top-right", "bottom-left", "bottom-right"],
+        }
+    )
+    sim = Simulation(_with_contact(scene, n, integrator, contact))
+    nx, ny = sim.resolution
+    tops = [(0, ny - 1), (nx - 1, ny - 1)]
+    starts = [sim.positions[sim.point_index(p)].copy() for p in tops]
+    axis = 0.5 * (starts[0] + starts[1])
+
+    def drive(sim):
+        angle = 3.0 * np.pi * min(sim.state.t / 1.5, 1.0)
+        c, s = np.cos(angle), np.sin(angle)
+        for point, start in zip(tops, starts, strict=True):
+            r = start - axis
+            sim.move_pin(point, axis + [c * r[0] - s * r[1], s * r[0] + c * r[1], r[2]])
+
+    return sim, drive
+
+
+ALL = {"crumple": crumple, "sphere drape": sphere_drape, "corner drag": corner_drag, "twist": twist}
