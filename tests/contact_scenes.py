@@ -56,8 +56,8 @@ def corner_drag(n: int, integrator: str, contact: bool = True):
 
 def twist(n: int, integrator: str, contact: bool = True):
     """A hanging cloth held by its four corners; the top two turn about the
-    vertical axis through its middle, one and a half turns in 1.5 s, so
-    the cloth winds onto itself."""
+    vertical axis through its middle, one turn in 1.5 s, so the cloth
+    winds onto itself."""
     scene = load_scene(SCENES / "hanging.toml").with_overrides(
         {
             "cloth.orientation": "vertical",
@@ -72,7 +72,7 @@ def twist(n: int, integrator: str, contact: bool = True):
     axis = 0.5 * (starts[0] + starts[1])
 
     def drive(sim):
-        angle = 3.0 * np.pi * min(sim.state.t / 1.5, 1.0)
+        angle = 2.0 * np.pi * min(sim.state.t / 1.5, 1.0)
         c, s = np.cos(angle), np.sin(angle)
         for point, start in zip(tops, starts, strict=True):
             r = start - axis
