@@ -169,10 +169,12 @@ def test_a_zone_its_own_pairs_meet_twice_in_one_pass_moves_and_is_not_held():
     v1 = (x1 - x0) / 0.1
     rows = np.array([[0, 3, 0], [0, 3, 0]])
     inv_mass = np.ones(4)
-    zoned, unresolved = self_collision.impact_zones(
-        rows, np.arange(2), triangles, edges, x0, x1, v1, inv_mass, 0.01
+    zones = self_collision._zones(x0, x1, v1)
+    everywhere = np.full((4, 3), -10.0), np.full((4, 3), 10.0)  # boxes: no list is needed
+    zoned, unresolved, done = self_collision.impact_zones(
+        rows, np.arange(2), triangles, edges, x0, x1, v1, inv_mass, 0.01, zones, *everywhere
     )
-    assert zoned == 4 and unresolved == 0
+    assert zoned == 4 and unresolved == 0 and done
     # All four move by their mean motion (2 m down shared by four): a
     # translation, so no distance changed, and the mean velocity.
     assert np.allclose(x1 - x0, [0.0, 0.0, -0.5])
@@ -269,10 +271,10 @@ def test_an_impulse_stops_a_point_falling_through_a_triangle_without_a_zone():
     v1 = (x1 - x0) / 0.1
     rows, inv_mass = np.array([[0, 3, 0]]), np.ones(4)
     assert self_collision.approaches(0, 3, 0, 1, 2, x0, x1, 0.01)
-    count = self_collision.impulses(
-        rows, np.arange(1), triangles, edges, x0, x1, v1, inv_mass, 0.01, 0.1, 3
+    count, moved = self_collision.impulses(
+        rows, np.arange(1), triangles, edges, x0, x1, v1, inv_mass, 0.01, 0.1, np.ones(4, bool)
     )
-    assert count >= 1
+    assert count == 1 and moved.all()
     assert not self_collision.approaches(0, 3, 0, 1, 2, x0, x1, 0.01)
     # Inelastic, momentum kept: the point ends moving with the triangle's
     # point below it (weights 0.6, 0.2, 0.2), and no momentum was made.

@@ -13,18 +13,18 @@ corner of (*VF*), and between two edges that share no point (*EE*).
 
 One step ``x0 -> x1`` (``x0`` the start, free of intersections)
 -----------------------------------------------------------------
-1. **Pair list** (broad phase, a Verlet list as in molecular dynamics):
-   each point gets a box holding its path over the step, grown by the
-   response's ``reach`` and a skin; every VF and EE pair whose points'
-   boxes come within ``thickness`` of each other is listed, found through a
-   uniform hash grid (:func:`box_pairs`; each overlap found once, from the
-   cell holding its lower corner; no O(N^2) pass). Boxes are convex, so
-   while each point's start and end (with its reach) stay in its box
+1. **Pair list** (broad phase): each point gets a box holding its path
+   over the step, grown by the response's ``reach``; every VF and EE pair
+   whose points' boxes come within ``thickness`` of each other is listed,
+   found through a uniform hash grid (:func:`box_pairs`; each overlap found
+   once, from the cell holding its lower corner; no O(N^2) pass). Boxes are
+   convex, so while each point's start and end stay in its box
    (:func:`inside`), so does everything the step does to it, and an
-   unlisted pair stays at least ``thickness`` apart. A step that leaves a
-   box lists again; a cloth at rest keeps its list for many steps.
+   unlisted pair stays at least ``thickness`` apart. The list is built
+   each step, in one fixed order: a list kept over steps would serve too,
+   but the step's result would then depend on the run's history.
 2. **Screen** (:func:`screen`): a listed pair can change its distance
-   from the *anchor* (the start of the step that built the list) by at
+   from the *anchor* (the start of the step) by at
    most the largest motion of its other points relative to its first one
    (for a point and a triangle; for two edges the first edge's other end
    adds its own), which :func:`_relative` bounds by the start's offset from
@@ -108,9 +108,6 @@ MAX_SAMPLES = 100
 MARGIN = 0.1
 #: Gauss-Seidel sweeps of the proximity response over the candidates.
 SWEEPS = 3
-#: How far (as a share of the thickness) a point may stray beyond its
-#: step's path and reach before the pair list is built again (step 1).
-SKIN = 0.5
 
 
 def grid_triangles(shape: tuple[int, int]) -> np.ndarray:
@@ -142,7 +139,6 @@ class Report:
     contacts: int = 0  # pair pushes of the proximity response, summed over its sweeps
     zoned: int = 0  # points moved as one with an impact zone
     unresolved: int = 0  # pairs still approaching with their zone held (pins pushed them)
-    rebuilt: bool = False  # whether this step built a new pair list
 
 
 class SelfCollision:
@@ -194,9 +190,11 @@ class SelfCollision:
         push them back, so a folded cloth on the ground would never come to
         rest). Returns the :class:`Report`."""
         d, reach = self.thickness, self.reach
-        rebuilt = self._anchor is None or not inside(self._low, self._high, x0, x1, reach)
-        if rebuilt:
-            self._build(x0, x1, reach)
+        # A list kept from an earlier step would do (every pair it adds is
+        # proven apart), but which pairs the zones meet, and so the step's
+        # result, would then depend on the run's history: a resumed run
+        # would not repeat a continuous one bit for bit. So each step lists.
+        self._build(x0, x1, reach)
         rows = self._rows
         near = screen(rows, self._gaps, self._anchor, x0, x1, self.triangles, self.edges, reach, d)
         start = x1.copy()
@@ -207,41 +205,46 @@ class SelfCollision:
             rows, near, self.triangles, self.edges, x0, x1, v1, start, inv_mass, floor,
             d, self.friction, dt, reach, SWEEPS,
         )  # fmt: skip
-        if impulses(
-            rows, near, self.triangles, self.edges, x0, x1, v1, inv_mass, MARGIN * d, dt, SWEEPS
-        ):
-            # The impulses moved points by more than the response's reach:
-            # list again if one left its box, and screen the final paths.
+        fresh = np.ones(len(x0), np.bool_)
+        for _ in range(SWEEPS):
+            count, fresh = impulses(
+                rows, near, self.triangles, self.edges, x0, x1, v1, inv_mass, MARGIN * d, dt, fresh
+            )
+            if not count:
+                break
+            # The impulses may move points by more than the response's reach:
+            # list again if one left its box, and screen the new paths (the
+            # pairs a sweep sees do not depend on the list's history).
             if not inside(self._low, self._high, x0, x1, 0.0):
                 self._build(x0, x1, 0.0)
-                rebuilt = True
                 rows = self._rows
             near = screen(
                 rows, self._gaps, self._anchor, x0, x1, self.triangles, self.edges, 0.0, d
             )
-        zoned, unresolved = impact_zones(
-            rows, near, self.triangles, self.edges, x0, x1, v1, inv_mass, MARGIN * d
-        )
-        while zoned and not inside(self._low, self._high, x0, x1, 0.0):
-            # A zone carried points past the list's skin: list again around
-            # the zoned motion, and check every listed pair once more.
+        zones = _zones(x0, x1, v1)
+        checked = near
+        while True:
+            zoned, unresolved, done = impact_zones(
+                rows, checked, self.triangles, self.edges, x0, x1, v1, inv_mass, MARGIN * d,
+                zones, self._low, self._high,
+            )  # fmt: skip
+            if done:
+                break
+            # A zone carried points past their boxes: list again around the
+            # paths as they are, and go on with every listed pair whose
+            # points moved. Zones only grow, follow a pin or are held, so
+            # this ends.
             self._build(x0, x1, 0.0)
-            rebuilt = True
             rows = self._rows
-            everything = np.arange(len(rows))
-            zoned, unresolved = impact_zones(
-                rows, everything, self.triangles, self.edges, x0, x1, v1, inv_mass, MARGIN * d
-            )
-        self.report = Report(
-            len(rows), len(near), int(contacts), int(zoned), int(unresolved), rebuilt
-        )
+            checked = np.arange(len(rows))
+        self.report = Report(len(rows), len(near), int(contacts), int(zoned), int(unresolved))
         return self.report
 
     def _build(self, x0: np.ndarray, x1: np.ndarray, reach: float) -> None:
         """List every pair whose points' boxes come within ``thickness``:
-        each box holds the point's step ``x0 -> x1`` grown by ``reach`` and
-        the skin; ``x0`` is the anchor of the screen."""
-        grow = reach + SKIN * self.thickness
+        each box holds the point's step ``x0 -> x1`` grown by ``reach`` (m);
+        ``x0`` is the anchor of the screen."""
+        grow = reach
         self._low = np.minimum(x0, x1) - grow
         self._high = np.maximum(x0, x1) + grow
         half = 0.5 * self.thickness
@@ -275,6 +278,25 @@ class SelfCollision:
 
 
 # -- the pair list and its screen -------------------------------------------------
+
+
+def _zones(x0: np.ndarray, x1: np.ndarray, v1: np.ndarray):
+    """Fresh impact-zone arrays for :func:`impact_zones`: union-find
+    parents; per point whether it is zoned and whether it moved since its
+    pairs were last checked; per zone root whether it is held, grew in this
+    pass, and the pinned point it follows (-1: none); each point's own
+    motion (m) and velocity (m/s) before any zone."""
+    n = len(x0)
+    return (
+        np.arange(n),
+        np.zeros(n, np.bool_),
+        np.zeros(n, np.bool_),
+        np.zeros(n, np.bool_),
+        np.full(n, -1),
+        np.ones(n, np.bool_),
+        x1 - x0,
+        v1.copy(),
+    )
 
 
 @njit(cache=True)
@@ -727,68 +749,69 @@ def approaches(kind, i0, i1, i2, i3, x0, x1, margin):  # pragma: no cover
 
 @njit(cache=True)
 def impulses(
-    rows, near, triangles, edges, x0, x1, v1, inv_mass, margin, dt, sweeps
+    rows, near, triangles, edges, x0, x1, v1, inv_mass, margin, dt, fresh
 ):  # pragma: no cover
-    """Before the impact zones: for each pair of ``rows[near]`` that comes
-    within the margin during the step, take away the part of its relative
-    motion (and velocity) along the line between the pair at that moment
-    that brings it closer (an inelastic impulse, Bridson et al. 2002,
-    section 7.4), in place on ``x1`` and ``v1``; repeated over the pairs
-    whose points moved, up to ``sweeps`` times. Most contacts end here, each
-    pair on its own, so fewer and smaller zones are needed. Returns how many
-    impulses there were."""
-    n_points = x0.shape[0]
-    fresh = np.ones(n_points, np.bool_)
-    moved = np.zeros(n_points, np.bool_)
+    """One sweep before the impact zones: for each pair of ``rows[near]``
+    with a ``fresh`` point that comes within the margin during the step,
+    take away the part of its relative motion (and velocity) along the line
+    between the pair at that moment that brings it closer (an inelastic
+    impulse, Bridson et al. 2002, section 7.4), in place on ``x1`` and
+    ``v1``. Most contacts end here, each pair on its own, so fewer and
+    smaller zones are needed. Returns ``(impulses, points moved)``."""
+    moved = np.zeros(x0.shape[0], np.bool_)
     ids = np.empty(4, np.int64)
-    total = 0
-    for _ in range(sweeps):
-        count = 0
-        moved[:] = False
-        for n in near:
-            kind = rows[n, 0]
-            i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
-            if not (fresh[i0] or fresh[i1] or fresh[i2] or fresh[i3]):
-                continue
-            s = first_touch(kind, i0, i1, i2, i3, x0, x1, margin)
-            if s < 0.0:
-                continue
-            w, gap = _closest(kind, i0, i1, i2, i3, x0, x1, s)
+    # Which pairs take part is settled before any moves: the list may hold
+    # more pairs than these (they are proven apart), and a move made here
+    # must not decide whether such a pair is looked at.
+    touching = np.empty(near.shape[0], np.int64)
+    found = 0
+    for n in near:
+        kind = rows[n, 0]
+        i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
+        if not (fresh[i0] or fresh[i1] or fresh[i2] or fresh[i3]):
+            continue
+        if first_touch(kind, i0, i1, i2, i3, x0, x1, margin) >= 0.0:
+            touching[found] = n
+            found += 1
+    count = 0
+    for n in touching[:found]:
+        kind = rows[n, 0]
+        i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
+        s = first_touch(kind, i0, i1, i2, i3, x0, x1, margin)
+        if s < 0.0:
+            continue
+        w, gap = _closest(kind, i0, i1, i2, i3, x0, x1, s)
+        length = math.sqrt(_dot(gap, gap))
+        if length <= 1e-12 * margin:  # touching: the side they came from
+            w, gap = _closest(kind, i0, i1, i2, i3, x0, x1, 0.0)
             length = math.sqrt(_dot(gap, gap))
-            if length <= 1e-12 * margin:  # touching: the side they came from
-                w, gap = _closest(kind, i0, i1, i2, i3, x0, x1, 0.0)
-                length = math.sqrt(_dot(gap, gap))
-                if length == 0.0:
-                    continue
-            normal = (gap[0] / length, gap[1] / length, gap[2] / length)
-            ids[0], ids[1], ids[2], ids[3] = i0, i1, i2, i3
-            share = 0.0
-            closing = 0.0
-            speed = 0.0
-            for k in range(4):
-                i = ids[k]
-                share += w[k] * w[k] * inv_mass[i]
-                for a in range(3):
-                    closing += w[k] * (x1[i, a] - x0[i, a]) * normal[a]
-                    speed += w[k] * v1[i, a] * normal[a]
-            if share == 0.0 or closing >= 0.0:
+            if length == 0.0:
                 continue
-            count += 1
-            for k in range(4):
-                i = ids[k]
-                scale = max(-1.0, min(1.0, w[k] * inv_mass[i] / share))
-                if scale == 0.0:
-                    continue
-                moved[i] = True
-                for a in range(3):
-                    x1[i, a] -= scale * closing * normal[a]
-                    if speed < 0.0:
-                        v1[i, a] -= scale * speed * normal[a]
-        total += count
-        if count == 0:
-            break
-        fresh[:] = moved
-    return total
+        normal = (gap[0] / length, gap[1] / length, gap[2] / length)
+        ids[0], ids[1], ids[2], ids[3] = i0, i1, i2, i3
+        share = 0.0
+        closing = 0.0
+        speed = 0.0
+        for k in range(4):
+            i = ids[k]
+            share += w[k] * w[k] * inv_mass[i]
+            for a in range(3):
+                closing += w[k] * (x1[i, a] - x0[i, a]) * normal[a]
+                speed += w[k] * v1[i, a] * normal[a]
+        if share == 0.0 or closing >= 0.0:
+            continue
+        count += 1
+        for k in range(4):
+            i = ids[k]
+            scale = max(-1.0, min(1.0, w[k] * inv_mass[i] / share))
+            if scale == 0.0:
+                continue
+            moved[i] = True
+            for a in range(3):
+                x1[i, a] -= scale * closing * normal[a]
+                if speed < 0.0:
+                    v1[i, a] -= scale * speed * normal[a]
+    return count, moved
 
 
 @njit(cache=True)
@@ -800,22 +823,21 @@ def _root(parent, i):  # pragma: no cover
 
 
 @njit(cache=True)
-def impact_zones(rows, near, triangles, edges, x0, x1, v1, inv_mass, margin):  # pragma: no cover
+def impact_zones(
+    rows, near, triangles, edges, x0, x1, v1, inv_mass, margin, zones, low, high
+):  # pragma: no cover
     """Join the free points of every approaching pair into a zone that moves
     as one over the step, until no pair approaches (step 4 of the module
     docstring); a zone an approach with pinned points still reaches is held
     at the start of the step. The first pass checks the pairs ``rows[near]``,
-    later ones every listed pair with a point the zones moved. Returns
-    ``(points in zones, pairs left approaching that no zone can clear)``."""
+    later ones every listed pair with a point the zones moved. ``zones``
+    (from :func:`_zones`) carries the zones between calls: when a zone
+    carries a point out of its box ``low``-``high`` the call stops, as the
+    list may miss a pair there, and the caller lists again and calls once
+    more with every listed pair. Returns ``(points in zones, pairs left
+    approaching that no zone can clear, whether it finished)``."""
+    parent, zoned, held, dirty, follow, fresh, own, own_v = zones
     n_points = x0.shape[0]
-    parent = np.arange(n_points)
-    zoned = np.zeros(n_points, np.bool_)
-    held = np.zeros(n_points, np.bool_)  # per zone root: stays at the start
-    dirty = np.zeros(n_points, np.bool_)  # per zone root: grew in this pass, not yet moved
-    follow = np.full(n_points, -1)  # per zone root: the pinned point it moves with
-    fresh = np.ones(n_points, np.bool_)  # moved since its pairs were last checked
-    own = x1 - x0  # each point's own motion over the step, before any zone
-    own_v = v1.copy()
     mass = np.zeros(n_points)
     sums = np.zeros((n_points, 6))
     unresolved = 0
@@ -909,4 +931,6 @@ def impact_zones(rows, near, triangles, edges, x0, x1, v1, inv_mass, margin):  #
                     v1[i, a] = velocity
         dirty[:] = False
         checked = np.arange(rows.shape[0])
-    return int(zoned.sum()), unresolved
+        if not inside(low, high, x0, x1, 0.0):
+            return int(zoned.sum()), 0, False
+    return int(zoned.sum()), unresolved, True
