@@ -1,13 +1,14 @@
 """What self-collision costs: step time with ``[self_collision]`` on against
-off, side by side in one run, on two scenes:
+off, side by side in one run, on three states:
 
-- **resting fold** (``data/scenes/fold.toml``): the long cloth after it has
-  fallen over the bar and the wind has laid one half on the other (run for
-  ``--settle`` seconds with self-collision on first; both runs then start
-  from that state);
-- **violent crumple**: the same cloth hung vertically with no pins and
-  dropped onto the ground from 0.3 m, so it folds onto itself as it lands
-  (timed from the start).
+- **fold in the wind** (``data/scenes/fold.toml``): the long cloth after it
+  has fallen over the bar and the wind has laid one half on the other (run
+  for ``--settle`` seconds with self-collision on first; both runs then
+  start from that state); the wind keeps it moving;
+- **resting fold**: the same, with the wind then switched off and
+  ``--calm`` more seconds to settle;
+- **violent crumple** (``data/scenes/crumple.toml``): a tall cloth let go
+  above the floor piles onto itself (timed from the start).
 
 Each measured step is ``sim.advance(dt)`` (one step: integrator, obstacles,
 pins, self-collision); the median over ``--steps`` steps is quoted, and the
@@ -31,12 +32,18 @@ HERE = Path(__file__).parent
 ROOT = HERE.parent
 
 
-def scenes(n: int):
+def starts(n: int, settle: float, calm: float):
+    """``(name, scene, state)``: each case's scene and the simulation (with
+    self-collision) whose state both timed runs start from."""
     fold = load_scene(ROOT / "data" / "scenes" / "fold.toml").with_resolution(n)
-    crumple = fold.with_overrides(
-        {"cloth.orientation": "vertical", "cloth.center": [0.0, 0.0, 0.6]}
-    ).replace(wind=None, obstacles=fold.obstacles[1:])
-    return {"resting fold": fold, "violent crumple": crumple}
+    windy = Simulation(fold)
+    windy.advance(settle)
+    yield "fold in the wind", fold, windy
+    windy.update({"wind.velocity": [0.0, 0.0, 0.0]})
+    windy.advance(calm)
+    yield "resting fold", fold.with_overrides({"wind.velocity": [0.0, 0.0, 0.0]}), windy
+    crumple = load_scene(ROOT / "data" / "scenes" / "crumple.toml").with_resolution(n)
+    yield "violent crumple", crumple, Simulation(crumple)
 
 
 def timed(sim: Simulation, steps: int) -> tuple[float, int]:
@@ -54,14 +61,12 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[32, 64, 128])
     parser.add_argument("--steps", type=int, default=40)
     parser.add_argument("--settle", type=float, default=1.5)
+    parser.add_argument("--calm", type=float, default=3.0)
     parser.add_argument("--out", default=str(HERE / "results" / "self_collision_cost.md"))
     args = parser.parse_args()
     rows = []
     for n in args.sizes:
-        for name, scene in scenes(n).items():
-            start = Simulation(scene)
-            if name == "resting fold":
-                start.advance(args.settle)
+        for name, scene, start in starts(n, args.settle, args.calm):
             on = Simulation(scene)
             off = Simulation(scene.replace(self_collision=None))
             for sim in (on, off):
@@ -76,8 +81,9 @@ def main() -> None:
         "# Self-collision: step time on against off",
         "",
         f"`python benchmarks/self_collision_cost.py --sizes {' '.join(map(str, args.sizes))} "
-        f"--steps {args.steps}`; median ms per step of `fast_mass_spring` at 1/60 s "
-        "(the scene's), on and off measured side by side from the same state.",
+        f"--steps {args.steps} --settle {args.settle:g} --calm {args.calm:g}`; median ms per "
+        "step of `fast_mass_spring` at 1/60 s (the scenes'), on and off measured side by "
+        "side from the same state.",
         "",
         "| points per side | scene | off (ms) | on (ms) | on / off | candidate pairs |",
         "|---|---|---|---|---|---|",
