@@ -230,12 +230,15 @@ class SelfCollision:
             )  # fmt: skip
             if done:
                 break
-            # A zone carried points past their boxes: list again around the
-            # paths as they are, and go on with every listed pair whose
-            # points moved. Zones only grow, follow a pin or are held, so
-            # this ends.
+            # Zones carried points past their boxes: list again around the
+            # paths as they are, and go on with every pair of those points
+            # (the others were checked against a list that held them). Zones
+            # only grow, follow a pin or are held, so this ends.
             self._build(x0, x1, 0.0)
             rows = self._rows
+            outside = zones[8]
+            zones[5][outside] = True
+            outside[:] = False
             checked = np.arange(len(rows))
         self.report = Report(len(rows), len(near), int(contacts), int(zoned), int(unresolved))
         return self.report
@@ -285,7 +288,8 @@ def _zones(x0: np.ndarray, x1: np.ndarray, v1: np.ndarray):
     parents; per point whether it is zoned and whether it moved since its
     pairs were last checked; per zone root whether it is held, grew in this
     pass, and the pinned point it follows (-1: none); each point's own
-    motion (m) and velocity (m/s) before any zone."""
+    motion (m) and velocity (m/s) before any zone; per point whether a zone
+    carried it out of its box since the list was built."""
     n = len(x0)
     return (
         np.arange(n),
@@ -296,6 +300,7 @@ def _zones(x0: np.ndarray, x1: np.ndarray, v1: np.ndarray):
         np.ones(n, np.bool_),
         x1 - x0,
         v1.copy(),
+        np.zeros(n, np.bool_),
     )
 
 
@@ -831,12 +836,13 @@ def impact_zones(
     docstring); a zone an approach with pinned points still reaches is held
     at the start of the step. The first pass checks the pairs ``rows[near]``,
     later ones every listed pair with a point the zones moved. ``zones``
-    (from :func:`_zones`) carries the zones between calls: when a zone
-    carries a point out of its box ``low``-``high`` the call stops, as the
-    list may miss a pair there, and the caller lists again and calls once
-    more with every listed pair. Returns ``(points in zones, pairs left
-    approaching that no zone can clear, whether it finished)``."""
-    parent, zoned, held, dirty, follow, fresh, own, own_v = zones
+    (from :func:`_zones`) carries the zones between calls. If a zone
+    carried a point out of its box ``low``-``high``, the list may have
+    missed a pair of it: the call returns unfinished, and the caller lists
+    again, marks those points moved and calls once more with every listed
+    pair. Returns ``(points in zones, pairs left approaching that no zone
+    can clear, whether it finished)``."""
+    parent, zoned, held, dirty, follow, fresh, own, own_v, outside = zones
     n_points = x0.shape[0]
     mass = np.zeros(n_points)
     sums = np.zeros((n_points, 6))
@@ -931,6 +937,11 @@ def impact_zones(
                     v1[i, a] = velocity
         dirty[:] = False
         checked = np.arange(rows.shape[0])
-        if not inside(low, high, x0, x1, 0.0):
-            return int(zoned.sum()), 0, False
+        for i in range(n_points):
+            if fresh[i]:
+                for a in range(3):
+                    if x1[i, a] < low[i, a] or x1[i, a] > high[i, a]:
+                        outside[i] = True
+    if outside.any():  # the list may have missed pairs of these points
+        return int(zoned.sum()), unresolved, False
     return int(zoned.sum()), unresolved, True
