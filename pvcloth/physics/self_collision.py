@@ -24,8 +24,8 @@ One step ``x0 -> x1`` (``x0`` the start, free of intersections)
    each step, in one fixed order: a list kept over steps would serve too,
    but the step's result would then depend on the run's history.
 2. **Screen** (:func:`screen`): a listed pair can change its distance
-   from the *anchor* (the start of the step) by at
-   most the largest motion of its other points relative to its first one
+   from the *anchor* (the start of the step) by at most the largest
+   motion of its other points relative to its first one
    (for a point and a triangle; for two edges the first edge's other end
    adds its own), which :func:`_relative` bounds by the start's offset from
    the anchor, the step's relative motion and twice ``reach``. Only pairs
@@ -54,16 +54,21 @@ One step ``x0 -> x1`` (``x0`` the start, free of intersections)
    no contact can occur before ``s + d / L``; the check advances by that
    much (less half the margin ``eta``) until ``s`` passes 1, and reports an
    approach when the distance falls below ``eta`` (a tenth of the
-   thickness, or half the start distance if that is smaller). The free
-   points of reported pairs join an **impact zone** (Provot 1997; Bridson
+   thickness, or half the start distance if that is smaller). A reported
+   pair first gets an inelastic impulse (:func:`impulses`; Bridson et al.
+   2002, section 7.4): the part of its relative motion and velocity along
+   the line between the pair at that moment that closes it is taken away;
+   up to ``SWEEPS`` sweeps, with the list built again if a point left its
+   box and the screen made again on the new paths. The free points of
+   pairs still reported join an **impact zone** (Provot 1997; Bridson
    et al. 2002, section 8, here without rotation): the zone moves over the
    step by its members' mass-weighted mean motion and takes their mean
    velocity, so its pairs keep the distances they had at the start and
    momentum is kept. Zones changed the paths of their triangles and edges,
    so the check runs again on every listed pair with a point that moved,
-   merging zones that still approach; if a zone carried points past the
-   list's skin, the list is built again around the new paths and every
-   listed pair checked. A zone that still approaches on its own can only
+   merging zones that still approach; if zones carried points past their
+   boxes, the list is built again around the new paths and every pair of
+   those points checked. A zone that still approaches on its own can only
    be pushed by a pinned point of one of its pairs; it then moves with that
    pin (a translation, which keeps its distances to the pin), and if a
    second pin drives into it as well, it is held at the start of the step.
@@ -73,7 +78,7 @@ One step ``x0 -> x1`` (``x0`` the start, free of intersections)
 Why no intersection appears: between two triangles that share no point, an
 intersection can only begin when a corner of one passes through the other or
 an edge of one passes through an edge of the other, while their points move
-on straight lines. Step 3 proves, with a margin, that no such VF or EE pair
+on straight lines. Step 4 proves, with a margin, that no such VF or EE pair
 touches during the final motion of the step, so a cloth that started the step
 without intersections ends it without them. The exception is motion imposed
 on pinned points: they cannot join a zone, and a zone that two pins moving
