@@ -5,13 +5,20 @@ does while rendering a frame) is printed and swallowed by VTK, so the run
 went on to the end as if nothing had happened. The handlers here record the
 signal; around calls into VTK (:func:`deferred`) they raise it only when the
 call returns, and the frame loops call :func:`check` between frames.
+
+A signal that arrives while a module is being imported is held until that
+import ends: raised inside a compiled extension's set-up (cholespy's
+nanobind enums, VTK's modules), it turned into a C++ exception that
+aborted the process (SIGABRT, a C++ traceback) instead of a short message.
 """
 
 from __future__ import annotations
 
+import builtins
 import contextlib
 import signal
 import sys
+import threading
 
 
 class Terminated(KeyboardInterrupt):
@@ -71,10 +78,29 @@ def handled():
             hook(unraisable)
 
     sys.unraisablehook = quiet
+    importer = builtins.__import__
+    builtins.__import__ = _held_during(importer)
     try:
         yield
     finally:
+        builtins.__import__ = importer
         sys.unraisablehook = hook
         for s, old in previous.items():
             signal.signal(s, old)
         _pending = None
+
+
+def _held_during(importer):
+    """``importer`` (``builtins.__import__``) with signals held until the
+    outermost import of the main thread ends, where :func:`deferred` raises
+    them. Signal handlers run only in the main thread, so other threads'
+    imports (dask's) are left alone."""
+    main = threading.main_thread()
+
+    def held_import(*args, **kwargs):
+        if threading.current_thread() is not main:
+            return importer(*args, **kwargs)
+        with deferred():
+            return importer(*args, **kwargs)
+
+    return held_import

@@ -154,3 +154,19 @@ def test_a_signal_python_cannot_raise_is_kept_quietly_for_check(capsys):
         assert capsys.readouterr().err == ""
         with pytest.raises(signals.Terminated):
             signals.check()
+
+
+def test_a_signal_during_an_import_is_held_until_the_import_ends(tmp_path, monkeypatch):
+    # As when SIGTERM lands inside a compiled extension's set-up (cholespy's
+    # nanobind enums): raised there, it aborted the process with a C++ error.
+    from pvcloth import signals
+
+    (tmp_path / "signalled_module.py").write_text(
+        "import signal\nsignal.raise_signal(signal.SIGTERM)\nFINISHED = True\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with signals.handled():
+        with pytest.raises(signals.Terminated):
+            import signalled_module  # noqa: F401
+    assert sys.modules["signalled_module"].FINISHED  # the module's body ran to its end
+    del sys.modules["signalled_module"]
