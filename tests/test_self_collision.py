@@ -216,6 +216,26 @@ def test_a_point_resting_on_an_obstacle_is_not_pushed_into_it():
     assert x[3, 2] == pytest.approx(0.1) and v[3, 2] == pytest.approx(0.0)
 
 
+def test_an_impulse_does_not_drive_a_point_resting_on_an_obstacle_into_it():
+    # The triangle lies on the ground; the point above falls through it in
+    # one step. The impulse stops the point and leaves the triangle where it
+    # is (shared, it would push the triangle into the ground).
+    x0, triangles, edges = _one_triangle([0.2, 0.2, 0.5])
+    x1 = x0.copy()
+    x1[3, 2] = -0.5
+    v1 = (x1 - x0) / 0.1
+    floor = np.zeros((4, 3))
+    floor[:3] = [0.0, 0.0, 1.0]
+    count, moved = self_collision.impulses(
+        np.array([[0, 3, 0]]), np.arange(1), triangles, edges, x0, x1, v1, np.ones(4), floor,
+        0.01, np.ones(4, bool),
+    )  # fmt: skip
+    assert count == 1 and moved.tolist() == [False, False, False, True]
+    assert np.array_equal(x1[:3], x0[:3]) and np.array_equal(v1[:3], np.zeros((3, 3)))
+    assert not self_collision.approaches(0, 3, 0, 1, 2, x0, x1, 0.01)
+    assert v1[3, 2] == pytest.approx(0.0)
+
+
 def test_a_run_with_self_collision_resumes_bit_for_bit(tmp_path):
     # The pair list is not saved: a resumed run builds its own, and the
     # response goes through pairs in one fixed order, so nothing changes.
@@ -272,7 +292,17 @@ def test_an_impulse_stops_a_point_falling_through_a_triangle_without_a_zone():
     rows, inv_mass = np.array([[0, 3, 0]]), np.ones(4)
     assert self_collision.approaches(0, 3, 0, 1, 2, x0, x1, 0.01)
     count, moved = self_collision.impulses(
-        rows, np.arange(1), triangles, edges, x0, x1, v1, inv_mass, 0.01, 0.1, np.ones(4, bool)
+        rows,
+        np.arange(1),
+        triangles,
+        edges,
+        x0,
+        x1,
+        v1,
+        inv_mass,
+        np.zeros_like(x0),
+        0.01,
+        np.ones(4, bool),
     )
     assert count == 1 and moved.all()
     assert not self_collision.approaches(0, 3, 0, 1, 2, x0, x1, 0.01)
@@ -280,3 +310,17 @@ def test_an_impulse_stops_a_point_falling_through_a_triangle_without_a_zone():
     # point below it (weights 0.6, 0.2, 0.2), and no momentum was made.
     below = np.dot([0.6, 0.2, 0.2], v1[:3, 2])
     assert v1[3, 2] == pytest.approx(below) and v1[:, 2].sum() == pytest.approx(-20.0)
+
+
+def test_a_step_that_would_list_too_many_pairs_is_refused_with_a_clear_error(monkeypatch):
+    # Every point of a small cloth flung through one spot in one step: the
+    # pair list would hold nearly every pair. Past MAX_PAIRS the step is
+    # refused by name instead of the memory running out.
+    from pvcloth.errors import DivergenceError
+
+    monkeypatch.setattr(self_collision, "MAX_PAIRS", 1000)
+    contact = self_collision.SelfCollision((8, 8), 0.01, 0.0)
+    x0 = np.stack(np.meshgrid(np.linspace(0, 1, 8), np.linspace(0, 1, 8), [0.0]), -1).reshape(-1, 3)
+    x1 = x0[::-1].copy()  # each point to its mirror: every path crosses the middle
+    with pytest.raises(DivergenceError, match=r"candidate pairs in one step .*lower solver\.dt"):
+        contact.resolve(x0, x1, (x1 - x0) / 0.01, np.ones(64), 0.01)

@@ -96,6 +96,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pvcloth.errors import DivergenceError
+
 try:
     from numba import njit
 except ImportError:  # pragma: no cover - exercised only where numba is missing
@@ -113,6 +115,10 @@ MAX_SAMPLES = 100
 MARGIN = 0.1
 #: Gauss-Seidel sweeps of the proximity response over the candidates.
 SWEEPS = 3
+#: More candidate pairs than this in one step means points moved far more
+#: in the step than a cloth does (each pair takes 16 bytes while listing):
+#: the step is refused rather than the memory run out.
+MAX_PAIRS = 20_000_000
 
 
 def grid_triangles(shape: tuple[int, int]) -> np.ndarray:
@@ -213,8 +219,9 @@ class SelfCollision:
         fresh = np.ones(len(x0), np.bool_)
         for _ in range(SWEEPS):
             count, fresh = impulses(
-                rows, near, self.triangles, self.edges, x0, x1, v1, inv_mass, MARGIN * d, dt, fresh
-            )
+                rows, near, self.triangles, self.edges, x0, x1, v1, inv_mass, floor,
+                MARGIN * d, fresh,
+            )  # fmt: skip
             if not count:
                 break
             # The impulses may move points by more than the response's reach:
@@ -280,9 +287,18 @@ class SelfCollision:
             n = box_pairs(
                 query_lo, query_hi, item_lo, item_hi, items, self.triangles, kind, cell, out
             )
-            if n <= self._capacity:
+            if n > MAX_PAIRS:
+                raise DivergenceError(
+                    f"self-collision: {n:,} candidate pairs in one step (more than "
+                    f"{MAX_PAIRS:,}): a point's path in this step spans {extent.max():.3g} m. "
+                    "The step is too long for this motion; lower solver.dt"
+                )
+            fits = n <= self._capacity
+            # Room for this step's count and a little more; a one-step burst
+            # does not keep a large buffer for the rest of the run.
+            self._capacity = max(1 << 16, int(1.5 * n))
+            if fits:
                 return out[:n]
-            self._capacity = int(1.5 * n)
 
 
 # -- the pair list and its screen -------------------------------------------------
@@ -623,6 +639,50 @@ def _closest(kind, i0, i1, i2, i3, x0, x1, s):  # pragma: no cover
     return w, gap
 
 
+@njit(cache=True, inline="always")
+def _contact(kind, i0, i1, i2, i3, x0, x1, s, start, thickness):  # pragma: no cover
+    """Closest-point weights, unit normal (from the second primitive to the
+    first) and distance (m) of a pair at share ``s`` of ``x0 -> x1``. Two
+    primitives that touch have no line between them: the normal is then
+    the side they came from, at ``start``; zero if that is undefined too."""
+    w, gap = _closest(kind, i0, i1, i2, i3, x0, x1, s)
+    distance = math.sqrt(_dot(gap, gap))
+    length = distance
+    if length <= 1e-9 * thickness:
+        _, gap = _closest(kind, i0, i1, i2, i3, start, start, 0.0)
+        length = math.sqrt(_dot(gap, gap))
+        if length == 0.0:
+            return w, (0.0, 0.0, 0.0), distance
+    return w, (gap[0] / length, gap[1] / length, gap[2] / length), distance
+
+
+@njit(cache=True, inline="always")
+def _free(w, normal, ids, inv_mass, floor, free):  # pragma: no cover
+    """Fill ``free`` (4,) with the inverse mass (1/kg) each corner of a pair
+    takes part with, and return the pair's share ``sum w_k^2 free_k``. A
+    corner the push along ``normal`` would drive into its obstacle (more
+    than ~6 degrees off its surface, whose normal ``floor`` holds) takes no
+    part, like a pin: else the obstacle pushes it back next step and it
+    never rests."""
+    share = 0.0
+    for k in range(4):
+        i = ids[k]
+        into = w[k] * (normal[0] * floor[i, 0] + normal[1] * floor[i, 1] + normal[2] * floor[i, 2])
+        free[k] = 0.0 if into < -0.1 else inv_mass[i]
+        share += w[k] * w[k] * free[k]
+    return share
+
+
+@njit(cache=True, inline="always")
+def _scale(weight, free, share):  # pragma: no cover
+    """The share of a pair's change that one corner takes. A corner that
+    moves the contact point only a little (a small weight, the others
+    pinned) would need a large change: none changes by more than the whole."""
+    if share == 0.0:
+        return 0.0
+    return max(-1.0, min(1.0, weight * free / share))
+
+
 # -- proximity response ------------------------------------------------------------
 
 
@@ -644,27 +704,11 @@ def respond(
         for n in near:
             kind = rows[n, 0]
             i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
-            w, gap = _closest(kind, i0, i1, i2, i3, x, x, 0.0)
-            distance = math.sqrt(_dot(gap, gap))
-            if distance >= thickness:
+            w, normal, distance = _contact(kind, i0, i1, i2, i3, x, x, 0.0, x0, thickness)
+            if distance >= thickness or normal[0] == normal[1] == normal[2] == 0.0:
                 continue
-            if distance <= 1e-9 * thickness:  # touching: the side they came from
-                _, gap = _closest(kind, i0, i1, i2, i3, x0, x0, 0.0)
-                distance = math.sqrt(_dot(gap, gap))
-                if distance == 0.0:
-                    continue
-            normal = (gap[0] / distance, gap[1] / distance, gap[2] / distance)
             ids[0], ids[1], ids[2], ids[3] = i0, i1, i2, i3
-            share = 0.0
-            for k in range(4):
-                i = ids[k]
-                into = w[k] * (
-                    normal[0] * floor[i, 0] + normal[1] * floor[i, 1] + normal[2] * floor[i, 2]
-                )
-                # Pushed into its obstacle (more than ~6 degrees off the
-                # surface): held like a pin for this pair.
-                free[k] = 0.0 if into < -0.1 else inv_mass[i]
-                share += w[k] * w[k] * free[k]
+            share = _free(w, normal, ids, inv_mass, floor, free)
             if share == 0.0:
                 continue
             touched += 1
@@ -685,13 +729,9 @@ def respond(
             push = thickness - distance
             for k in range(4):
                 i = ids[k]
-                scale = w[k] * free[k] / share
+                scale = _scale(w[k], free[k], share)
                 if scale == 0.0:
                     continue
-                # A corner that moves the contact point only a little (a small
-                # weight, the others pinned) would need a large change: no
-                # point changes by more than the pair's whole push.
-                scale = max(-1.0, min(1.0, scale))
                 far2 = 0.0
                 for a in range(3):
                     dv = approach * normal[a] - stop * tangent[a]
@@ -759,7 +799,7 @@ def approaches(kind, i0, i1, i2, i3, x0, x1, margin):  # pragma: no cover
 
 @njit(cache=True)
 def impulses(
-    rows, near, triangles, edges, x0, x1, v1, inv_mass, margin, dt, fresh
+    rows, near, triangles, edges, x0, x1, v1, inv_mass, floor, margin, fresh
 ):  # pragma: no cover
     """One sweep before the impact zones: for each pair of ``rows[near]``
     with a ``fresh`` point that comes within the margin during the step,
@@ -767,9 +807,12 @@ def impulses(
     between the pair at that moment that brings it closer (an inelastic
     impulse, Bridson et al. 2002, section 7.4), in place on ``x1`` and
     ``v1``. Most contacts end here, each pair on its own, so fewer and
-    smaller zones are needed. Returns ``(impulses, points moved)``."""
+    smaller zones are needed. Like :func:`respond`, it does not drive a
+    point into the obstacle whose normal ``floor`` holds for it. Returns
+    ``(impulses, points moved)``."""
     moved = np.zeros(x0.shape[0], np.bool_)
     ids = np.empty(4, np.int64)
+    free = np.empty(4)
     # Which pairs take part is settled before any moves: the list may hold
     # more pairs than these (they are proven apart), and a move made here
     # must not decide whether such a pair is looked at.
@@ -790,21 +833,15 @@ def impulses(
         s = first_touch(kind, i0, i1, i2, i3, x0, x1, margin)
         if s < 0.0:
             continue
-        w, gap = _closest(kind, i0, i1, i2, i3, x0, x1, s)
-        length = math.sqrt(_dot(gap, gap))
-        if length <= 1e-12 * margin:  # touching: the side they came from
-            w, gap = _closest(kind, i0, i1, i2, i3, x0, x1, 0.0)
-            length = math.sqrt(_dot(gap, gap))
-            if length == 0.0:
-                continue
-        normal = (gap[0] / length, gap[1] / length, gap[2] / length)
+        w, normal, _ = _contact(kind, i0, i1, i2, i3, x0, x1, s, x0, margin)
+        if normal[0] == normal[1] == normal[2] == 0.0:
+            continue
         ids[0], ids[1], ids[2], ids[3] = i0, i1, i2, i3
-        share = 0.0
+        share = _free(w, normal, ids, inv_mass, floor, free)
         closing = 0.0
         speed = 0.0
         for k in range(4):
             i = ids[k]
-            share += w[k] * w[k] * inv_mass[i]
             for a in range(3):
                 closing += w[k] * (x1[i, a] - x0[i, a]) * normal[a]
                 speed += w[k] * v1[i, a] * normal[a]
@@ -813,7 +850,7 @@ def impulses(
         count += 1
         for k in range(4):
             i = ids[k]
-            scale = max(-1.0, min(1.0, w[k] * inv_mass[i] / share))
+            scale = _scale(w[k], free[k], share)
             if scale == 0.0:
                 continue
             moved[i] = True
