@@ -49,7 +49,7 @@ RUNS = {
     "newton_peer.py": ([], "newton_peer.md"),
     "render_cost.py": (["--frames", "2", "--sizes", "8"], "render_cost.md"),
     "self_collision_cost.py": (
-        ["--sizes", "8", "--steps", "2", "--settle", "0.1", "--calm", "0.1"],
+        ["--sizes", "8", "--steps", "2", "--settle", "1.1", "--windy", "0.1"],
         "self_collision_cost.md",
     ),
     "startup.py": ([], "startup.md"),

@@ -274,8 +274,10 @@ def _first_intersection(sim, drive, seconds: float, stop_at_first: bool) -> tupl
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name, seconds", [("crumple", 1.5), ("corner drag", 1.0), ("twist", 1.5)])
-def test_a_cloth_piled_dragged_or_twisted_onto_itself_never_intersects(name, seconds):
+@pytest.mark.parametrize(
+    "name, seconds", [("crumple", 1.5), ("corner drag", 1.0), ("twist", 1.5), ("towel fold", 2.0)]
+)
+def test_a_cloth_piled_dragged_twisted_or_folded_onto_itself_never_intersects(name, seconds):
     from contact_scenes import ALL
 
     without, _ = _first_intersection(*ALL[name](32, "fast_mass_spring", False), seconds, True)
