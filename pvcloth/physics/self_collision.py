@@ -119,6 +119,9 @@ SWEEPS = 3
 #: in the step than a cloth does (each pair takes 16 bytes while listing):
 #: the step is refused rather than the memory run out.
 MAX_PAIRS = 20_000_000
+#: The kept, wider pair list's boxes are grown by this share of the
+#: thickness beyond each step's own (see ``SelfCollision._build``).
+SKIN = 0.5
 
 
 def grid_triangles(shape: tuple[int, int]) -> np.ndarray:
@@ -186,8 +189,14 @@ class SelfCollision:
         self._low = np.empty((0, 3))  # (N, 3) m: the box each point must stay in
         self._high = np.empty((0, 3))
         self._rows = np.empty((0, 3), np.int64)  # the pair list: (kind, first, second)
+        self._wide = np.empty((0, 3), np.int64)  # the wider list it is taken from
+        self._wide_lo = np.empty((0, 3))  # (N, 3) m: the wider list's boxes
+        self._wide_hi = np.empty((0, 3))
+        self._served = 0  # calls of _build the wider list has served
+        self._reuse = 1.0  # how often wider lists served more than one call, lately
+        self._rebuilds = 0
         self._gaps = np.empty(0)  # (P,) m: each listed pair's distance at the anchor
-        self._capacity = 1 << 16
+        self._capacity = [1 << 16, 1 << 16]  # room for VF and for EE pairs
 
     def resolve(
         self, x0: np.ndarray, x1: np.ndarray, v1: np.ndarray, inv_mass, dt: float, resting=()
@@ -258,22 +267,48 @@ class SelfCollision:
     def _build(self, x0: np.ndarray, x1: np.ndarray, reach: float) -> None:
         """List every pair whose points' boxes come within ``thickness``:
         each box holds the point's step ``x0 -> x1`` grown by ``reach`` (m);
-        ``x0`` is the anchor of the screen."""
-        grow = reach
-        self._low = np.minimum(x0, x1) - grow
-        self._high = np.maximum(x0, x1) + grow
+        ``x0`` is the anchor of the screen.
+
+        The list is the pairs of a kept, wider list (each box grown by
+        ``SKIN`` thickness more) whose boxes overlap: while every box stays
+        inside its wider one, that list holds every such pair, so the
+        result is the same pairs in the same order as a list built afresh;
+        only when a box leaves is the wider list built again."""
+        self._low = np.minimum(x0, x1) - reach
+        self._high = np.maximum(x0, x1) + reach
         half = 0.5 * self.thickness
         lo, hi = self._low - half, self._high + half
+        grow = -1.0
+        if self._wide_lo.shape != lo.shape or not contains(self._wide_lo, self._wide_hi, lo, hi):
+            # The wider list costs more to build; it pays only while boxes
+            # stay in it (a cloth at rest), not when every call leaves it
+            # (a crumple). Which list is used changes no result, only time.
+            self._reuse = 0.8 * self._reuse + 0.2 * (self._served > 1)
+            self._rebuilds += 1
+            wide = self._reuse > 0.3 or self._rebuilds % 10 == 0
+            grow = SKIN * self.thickness if wide else 0.0
+            self._wide_lo, self._wide_hi = lo - grow, hi + grow
+            self._wide = self._pairs(self._wide_lo, self._wide_hi)
+            self._served = 0
+        self._served += 1
+        exact = self._served == 1 and grow == 0.0  # built from these very boxes
+        rows = self._wide if exact else overlapping(self._wide, lo, hi, self.triangles, self.edges)
+        self._anchor = x0.copy()
+        self._rows = rows
+        self._gaps = pair_distances(rows, self.triangles, self.edges, self._anchor)
+
+    def _pairs(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """Rows ``(kind, first, second)`` of every VF and EE pair whose boxes
+        (from the points' boxes ``lo``-``hi``) overlap, sorted."""
         vf, ee = self._box_pairs(lo, hi, 0), self._box_pairs(lo, hi, 1)
         rows = np.empty((len(vf) + len(ee), 3), np.int64)
         rows[: len(vf), 0], rows[len(vf) :, 0] = 0, 1
         rows[: len(vf), 1:], rows[len(vf) :, 1:] = vf, ee
-        # One order whatever the list's history: the response sweeps pairs in
-        # this order, so a resumed run repeats a continuous one bit for bit.
-        rows = rows[np.lexsort((rows[:, 2], rows[:, 1], rows[:, 0]))]
-        self._anchor = x0.copy()
-        self._rows = rows
-        self._gaps = pair_distances(rows, self.triangles, self.edges, self._anchor)
+        # One order whatever the boxes were (the hash grid's cells follow
+        # them): the response sweeps pairs in this order, so a run repeats
+        # itself bit for bit whichever lists it kept.
+        sort_rows(rows)
+        return rows
 
     def _box_pairs(self, lo, hi, kind: int) -> np.ndarray:
         items = self.triangles if kind == 0 else self.edges
@@ -283,7 +318,7 @@ class SelfCollision:
         # Most boxes fit one cell; the few long ones (a fast point) span several.
         cell = max(float(np.percentile(extent, 90)), 1e-9 * float(np.abs(hi).max() + 1.0))
         while True:
-            out = np.empty((self._capacity, 2), np.int64)
+            out = np.empty((self._capacity[kind], 2), np.int64)
             n = box_pairs(
                 query_lo, query_hi, item_lo, item_hi, items, self.triangles, kind, cell, out
             )
@@ -293,10 +328,10 @@ class SelfCollision:
                     f"{MAX_PAIRS:,}): a point's path in this step spans {extent.max():.3g} m. "
                     "The step is too long for this motion; lower solver.dt"
                 )
-            fits = n <= self._capacity
+            fits = n <= self._capacity[kind]
             # Room for this step's count and a little more; a one-step burst
             # does not keep a large buffer for the rest of the run.
-            self._capacity = max(1 << 16, int(1.5 * n))
+            self._capacity[kind] = max(1 << 16, int(1.5 * n))
             if fits:
                 return out[:n]
 
@@ -382,6 +417,56 @@ def screen(rows, gaps, anchor, x0, x1, triangles, edges, reach, thickness):  # p
 
 
 # -- broad phase ---------------------------------------------------------------
+
+
+@njit(cache=True)
+def sort_rows(rows):  # pragma: no cover
+    """Sort rows ``(kind, first, second)`` in place by kind, then first, then
+    second. :func:`box_pairs` gives each kind in increasing ``first`` (its
+    query order), so only each run of one ``first`` needs sorting."""
+    start = 0
+    n = rows.shape[0]
+    while start < n:
+        end = start + 1
+        while end < n and rows[end, 0] == rows[start, 0] and rows[end, 1] == rows[start, 1]:
+            end += 1
+        if end - start > 1:
+            rows[start:end, 2] = np.sort(rows[start:end, 2])
+        start = end
+
+
+@njit(cache=True)
+def contains(outer_lo, outer_hi, lo, hi):  # pragma: no cover
+    """Whether every box ``lo``-``hi`` (N, 3) lies inside its ``outer`` box."""
+    for i in range(lo.shape[0]):
+        for a in range(3):
+            if lo[i, a] < outer_lo[i, a] or hi[i, a] > outer_hi[i, a]:
+                return False
+    return True
+
+
+@njit(cache=True)
+def overlapping(rows, lo, hi, triangles, edges):  # pragma: no cover
+    """The rows whose two primitives' boxes overlap, in their order; the box
+    of a triangle or edge is the union of its points' boxes ``lo``-``hi``,
+    as in :func:`box_pairs`."""
+    keep = np.empty(rows.shape[0], np.bool_)
+    for n in range(rows.shape[0]):
+        kind = rows[n, 0]
+        i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
+        overlap = True
+        for a in range(3):
+            if kind == 0:
+                first_lo, first_hi = lo[i0, a], hi[i0, a]
+                second_lo = min(lo[i1, a], min(lo[i2, a], lo[i3, a]))
+                second_hi = max(hi[i1, a], max(hi[i2, a], hi[i3, a]))
+            else:
+                first_lo, first_hi = min(lo[i0, a], lo[i1, a]), max(hi[i0, a], hi[i1, a])
+                second_lo, second_hi = min(lo[i2, a], lo[i3, a]), max(hi[i2, a], hi[i3, a])
+            if first_lo > second_hi or first_hi < second_lo:
+                overlap = False
+        keep[n] = overlap
+    return rows[keep]
 
 
 @njit(cache=True)
