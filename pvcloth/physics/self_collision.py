@@ -954,6 +954,20 @@ def _root(parent, i):  # pragma: no cover
     return i
 
 
+@njit(cache=True, inline="always")
+def _one_zone(i0, i1, i2, i3, zoned, parent, dirty):  # pragma: no cover
+    """Whether all four points are in one zone that has not changed since
+    it last moved: they then moved by one translation, so the pair keeps
+    the distance it started with and cannot approach (what
+    :func:`approaches` would find, without its cost)."""
+    if not (zoned[i0] and zoned[i1] and zoned[i2] and zoned[i3]):
+        return False
+    root = _root(parent, i0)
+    if dirty[root]:
+        return False
+    return _root(parent, i1) == root and _root(parent, i2) == root and _root(parent, i3) == root
+
+
 @njit(cache=True)
 def impact_zones(
     rows, near, triangles, edges, x0, x1, v1, inv_mass, margin, zones, low, high
@@ -983,6 +997,8 @@ def impact_zones(
             i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
             if not (fresh[i0] or fresh[i1] or fresh[i2] or fresh[i3]):
                 continue
+            if _one_zone(i0, i1, i2, i3, zoned, parent, dirty):
+                continue  # one translation moved all four: the distance is kept
             if not approaches(kind, i0, i1, i2, i3, x0, x1, margin):
                 continue
             here = False
