@@ -4,12 +4,16 @@ before every step (the way a script or the window's mouse does)."""
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 
 from conftest import ROOT
 from pvcloth import SelfCollisionSpec, Simulation, load_scene
 
 SCENES = ROOT / "data" / "scenes"
+sys.path.insert(0, str(ROOT / "examples"))
+from fold_a_towel import fold_a_towel  # noqa: E402
 
 
 def _with_contact(scene, n: int, integrator: str, contact: bool):
@@ -82,35 +86,9 @@ def twist(n: int, integrator: str, contact: bool = True):
 
 
 def towel_fold(n: int, integrator: str, contact: bool = True):
-    """A cloth lying on the floor folded in half like a towel: its left edge
-    is carried over on a half circle in 1 s and laid 2 cm above the right
-    half, then let go; the top half settles on the bottom one. Bending is
-    soft (0.2 N/m) so the fold holds instead of springing open."""
-    scene = load_scene(SCENES / "ground.toml").with_overrides(
-        {"cloth.center": [0.0, 0.0, 0.01], "pins.corners": [], "springs.bending.stiffness": 0.2}
-    )
-    sim = Simulation(_with_contact(scene, n, integrator, contact))
-    nx, ny = sim.resolution
-    edge = [(0, j) for j in range(ny)]
-    starts = [sim.positions[sim.point_index(p)].copy() for p in edge]
-    for point in edge:
-        sim.pin(point)
-
-    def drive(sim):
-        if not sim.control.pinned[sim.point_index(edge[0])]:
-            return
-        share = min(sim.state.t / 1.0, 1.0)
-        if share == 1.0:
-            for point in edge:
-                sim.unpin(point)
-            return
-        angle = np.pi * share
-        for point, start in zip(edge, starts, strict=True):
-            r = -start[0]  # the distance to the fold line x = 0
-            up = r * np.sin(angle) + 0.02 * share
-            sim.move_pin(point, [-r * np.cos(angle), start[1], start[2] + up])
-
-    return sim, drive
+    """The towel of ``examples/fold_a_towel.py``: a cloth on the floor folded
+    in half by its left edge in 1 s, then let go to settle on itself."""
+    return fold_a_towel(n, integrator, contact)
 
 
 ALL = {

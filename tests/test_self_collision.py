@@ -191,7 +191,8 @@ def test_a_corner_with_a_small_weight_is_not_flung_when_the_others_are_pinned():
     inv_mass = np.array([1.0, 0.0, 0.0, 0.0])  # only corner 0 may move
     rows, floor = np.array([[0, 3, 0]]), np.zeros((4, 3))
     self_collision.respond(
-        rows, np.arange(1), triangles, edges, x0, x, v, x0.copy(), inv_mass, floor,
+        rows, np.arange(1), np.zeros(1, bool), triangles, edges, x0, x, v, x0.copy(), inv_mass,
+        floor,
         0.1, 0.0, 0.01, 0.05, 1,
     )  # fmt: skip
     assert np.linalg.norm(v[0]) <= 1.0 + 1e-12  # no more than the approach removed
@@ -209,7 +210,8 @@ def test_a_point_resting_on_an_obstacle_is_not_pushed_into_it():
     floor[:3] = [0.0, 0.0, 1.0]
     rows = np.array([[0, 3, 0]])
     self_collision.respond(
-        rows, np.arange(1), triangles, edges, x0, x, v, x0.copy(), np.ones(4), floor,
+        rows, np.arange(1), np.zeros(1, bool), triangles, edges, x0, x, v, x0.copy(), np.ones(4),
+        floor,
         0.1, 0.0, 0.01, 0.5, 1,
     )  # fmt: skip
     assert np.array_equal(x[:3], x0[:3]) and np.array_equal(v[:3], np.zeros((3, 3)))

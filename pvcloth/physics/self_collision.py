@@ -122,6 +122,11 @@ MAX_PAIRS = 20_000_000
 #: The kept, wider pair list's boxes are grown by this share of the
 #: thickness beyond each step's own (see ``SelfCollision._build``).
 SKIN = 0.5
+#: Two sides of one crease (a pair with points one grid step apart) are
+#: kept this share of the thickness apart, not the whole: a fold of one
+#: cell cannot open its crease that wide, and pushing it to would make
+#: the crease chatter against gravity at rest. No crossing still holds.
+CREASE = 0.2
 
 
 def grid_triangles(shape: tuple[int, int]) -> np.ndarray:
@@ -221,8 +226,9 @@ class SelfCollision:
         floor = np.zeros_like(x1)  # per point: its obstacle's outward normal, or zero
         for contact in resting:
             floor[contact.index] = contact.normal
+        crease = creases(rows, self.triangles, self.edges, self.shape[1])
         contacts = respond(
-            rows, near, self.triangles, self.edges, x0, x1, v1, start, inv_mass, floor,
+            rows, near, crease, self.triangles, self.edges, x0, x1, v1, start, inv_mass, floor,
             d, self.friction, dt, reach, SWEEPS,
         )  # fmt: skip
         fresh = np.ones(len(x0), np.bool_)
@@ -417,6 +423,26 @@ def screen(rows, gaps, anchor, x0, x1, triangles, edges, reach, thickness):  # p
 
 
 # -- broad phase ---------------------------------------------------------------
+
+
+@njit(cache=True)
+def creases(rows, triangles, edges, columns):  # pragma: no cover
+    """Per row, whether a point of its first primitive and one of its second
+    are at most one grid step apart (``columns`` points per grid row, point
+    ``i + columns j`` at column ``i``, row ``j``): two sides of a crease
+    through those points, not two layers."""
+    out = np.zeros(rows.shape[0], np.bool_)
+    for n in range(rows.shape[0]):
+        kind = rows[n, 0]
+        i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
+        # VF: point i0 and corners i1-i3; EE: ends i0, i1 and ends i2, i3.
+        first = (i0, i0) if kind == 0 else (i0, i1)
+        second = (i1, i2, i3) if kind == 0 else (i2, i3, i3)
+        for a in first:
+            for b in second:
+                if abs(a % columns - b % columns) <= 1 and abs(a // columns - b // columns) <= 1:
+                    out[n] = True
+    return out
 
 
 @njit(cache=True)
@@ -773,14 +799,16 @@ def _scale(weight, free, share):  # pragma: no cover
 
 @njit(cache=True)
 def respond(
-    rows, near, triangles, edges, x0, x, v, start, inv_mass, floor,
+    rows, near, crease, triangles, edges, x0, x, v, start, inv_mass, floor,
     thickness, friction, dt, reach, sweeps,
 ):  # fmt: skip  # pragma: no cover
     """Push every pair ``rows[near]`` closer than ``thickness`` apart, in
     place on ``x`` and ``v`` (step 3 of the module docstring); no point ends
     farther than ``reach`` from ``start``, and none is pushed into the
     obstacle whose outward normal ``floor`` holds for it (zero: none).
-    Returns how many pair pushes there were, summed over the sweeps."""
+    A pair marked in ``crease`` (per row, from :func:`creases`) is two sides
+    of one fold, kept only ``CREASE`` thickness apart. Returns how many pair
+    pushes there were, summed over the sweeps."""
     ids = np.empty(4, np.int64)
     free = np.empty(4)
     contacts = 0
@@ -789,8 +817,9 @@ def respond(
         for n in near:
             kind = rows[n, 0]
             i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
+            target = CREASE * thickness if crease[n] else thickness
             w, normal, distance = _contact(kind, i0, i1, i2, i3, x, x, 0.0, x0, thickness)
-            if distance >= thickness or normal[0] == normal[1] == normal[2] == 0.0:
+            if distance >= target or normal[0] == normal[1] == normal[2] == 0.0:
                 continue
             ids[0], ids[1], ids[2], ids[3] = i0, i1, i2, i3
             share = _free(w, normal, ids, inv_mass, floor, free)
@@ -811,7 +840,7 @@ def respond(
             slide = math.sqrt(_dot(tangent, tangent))
             limit = friction * approach
             stop = 1.0 if slide <= limit else limit / slide  # share of the slide removed
-            push = thickness - distance
+            push = target - distance
             for k in range(4):
                 i = ids[k]
                 scale = _scale(w[k], free[k], share)
