@@ -23,10 +23,15 @@ SCENE = Path(__file__).resolve().parents[1] / "data" / "scenes" / "ground.toml"
 FOLD_TIME = 1.0
 
 
-def fold_a_towel(resolution: int = 32, integrator: str = "fast_mass_spring", contact=True):
+def fold_a_towel(
+    resolution: int = 32,
+    integrator: str = "fast_mass_spring",
+    contact: bool = True,
+    friction: float = 0.3,
+):
     """The towel on the floor, ready to fold: ``(sim, drive)``; call
     ``drive(sim)`` before each advance to move (and then let go) the edge.
-    ``contact`` turns self-collision on (the scene's defaults)."""
+    ``contact`` turns self-collision on, with ``friction`` between layers."""
     scene = pvcloth.load_scene(SCENE).with_resolution(resolution)
     scene = scene.with_overrides(
         {
@@ -37,7 +42,9 @@ def fold_a_towel(resolution: int = 32, integrator: str = "fast_mass_spring", con
             "solver.dt": None,
         }
     )
-    scene = scene.replace(self_collision=pvcloth.SelfCollisionSpec() if contact else None)
+    scene = scene.replace(
+        self_collision=pvcloth.SelfCollisionSpec(friction=friction) if contact else None
+    )
     sim = pvcloth.Simulation(scene)
     nx, ny = sim.resolution
     edge = [(0, j) for j in range(ny)]

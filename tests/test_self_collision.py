@@ -349,3 +349,51 @@ def test_a_step_that_would_list_too_many_pairs_is_refused_with_a_clear_error(mon
     x1 = x0[::-1].copy()  # each point to its mirror: every path crosses the middle
     with pytest.raises(DivergenceError, match=r"candidate pairs in one step .*lower solver\.dt"):
         contact.resolve(x0, x1, (x1 - x0) / 0.01, np.ones(64), 0.01)
+
+
+def test_a_folded_towel_at_rest_does_not_chatter():
+    # The towel of examples/fold_a_towel.py, let go at 1 s, over its third
+    # second. Layers that chatter gain about one step of gravity every step:
+    # the bound is a hundredth of that, the kinetic energy of the whole cloth
+    # after one step of free fall, (1/2) M (g dt)^2. (Pushing the two sides
+    # of the crease a whole thickness apart gave ~5e-5 J here, twice over.)
+    from contact_scenes import towel_fold
+
+    sim, drive = towel_fold(32, "fast_mass_spring")
+    mass = sim.scene.cloth.mass
+    bound = 0.01 * 0.5 * mass * (9.81 * sim.dt) ** 2
+    worst = 0.0
+    while sim.state.t < 3.0 - 1e-9:
+        drive(sim)
+        sim.advance(sim.dt)
+        if sim.state.t > 2.0:
+            worst = max(worst, sim.energy()["kinetic"])
+    assert sim.model.self_collision.report.contacts > 100  # the top half lies on the bottom one
+    assert sim.positions[:, 2].max() > 1.5 * sim.model.self_collision.thickness  # still folded
+    assert worst < bound, f"kinetic energy {worst:.2e} J at rest, bound {bound:.2e} J"
+
+
+def test_friction_between_layers_holds_a_fold_on_a_slope():
+    # The folded towel at rest, then the floor tilted by 14 degrees along the
+    # fold line (gravity turned instead). tan 14 = 0.25: friction 0.3 between
+    # the layers holds the top half; with none it slides away.
+    import sys
+
+    sys.path.insert(0, str(ROOT / "examples"))
+    from fold_a_towel import fold_a_towel
+
+    slid = {}
+    for friction in (0.3, 0.0):
+        sim, drive = fold_a_towel(32, friction=friction)
+        while sim.state.t < 2.0 - 1e-9:
+            drive(sim)
+            sim.advance(sim.dt)
+        top = sim.positions[:, 2] > sim.model.self_collision.thickness
+        assert 200 < top.sum() < 800  # about half the cloth is the top layer
+        angle = np.radians(14.0)
+        sim.update({"gravity": [0.0, 9.81 * np.sin(angle), -9.81 * np.cos(angle)]})
+        before = sim.positions[top, 1].mean()
+        sim.advance(1.0)
+        slid[friction] = sim.positions[top, 1].mean() - before
+    assert abs(slid[0.3]) < 0.01  # held: under a centimetre in a second
+    assert slid[0.0] > 0.1  # without friction it slides down the slope
