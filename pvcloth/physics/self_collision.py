@@ -20,9 +20,10 @@ One step ``x0 -> x1`` (``x0`` the start, free of intersections)
    once, from the cell holding its lower corner; no O(N^2) pass). Boxes are
    convex, so while each point's start and end stay in its box
    (:func:`inside`), so does everything the step does to it, and an
-   unlisted pair stays at least ``thickness`` apart. The list is built
-   each step, in one fixed order: a list kept over steps would serve too,
-   but the step's result would then depend on the run's history.
+   unlisted pair stays at least ``thickness`` apart. Each step's list is
+   the same pairs, in one sorted order, whatever the run's history: it is
+   filtered from a kept list with wider boxes while the boxes stay in
+   those, and the step's result so never depends on which list was kept.
 2. **Screen** (:func:`screen`): a listed pair can change its distance
    from the *anchor* (the start of the step) by at most the largest
    motion of its other points relative to its first one
@@ -39,7 +40,9 @@ One step ``x0 -> x1`` (``x0`` the start, free of intersections)
    relative velocity is removed (inelastic), and Coulomb friction with
    ``friction`` times that normal change holds or slows its sliding. The
    push is shared by the inverse masses and the closest point's barycentric
-   weights, so pinned points do not move and momentum is kept. No point is
+   weights, so pinned points do not move and momentum is kept. Two sides
+   of one crease (points one grid step apart) are kept only ``CREASE``
+   thickness apart: a one-cell fold cannot open wider. No point is
    moved more than ``reach`` (half the thickness) from where the step put
    it, as steps 1 and 2 assumed.
 4. **No crossing** (continuous, :func:`approaches`): for every pair the
