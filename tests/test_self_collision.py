@@ -149,6 +149,11 @@ def test_a_direct_spec_is_checked_against_the_grid_too():
 # -- the response and the zones, on a few points ----------------------------------
 
 
+#: Grid cells (column, row) for the four points of :func:`_one_triangle`,
+#: far apart: no pair of them is two sides of one crease.
+APART = np.array([[0, 0], [10, 0], [20, 0], [30, 0]])
+
+
 def _one_triangle(p):
     """Points 0-2 a triangle in z = 0, point 3 at ``p``; rows of the pair
     list for the point against the triangle."""
@@ -191,8 +196,8 @@ def test_a_corner_with_a_small_weight_is_not_flung_when_the_others_are_pinned():
     inv_mass = np.array([1.0, 0.0, 0.0, 0.0])  # only corner 0 may move
     rows, floor = np.array([[0, 3, 0]]), np.zeros((4, 3))
     self_collision.respond(
-        rows, np.arange(1), np.zeros(1, bool), triangles, edges, x0, x, v, x0.copy(), inv_mass,
-        floor,
+        rows, np.arange(1), self_collision.pair_distances(rows, triangles, edges, x0), APART,
+        triangles, edges, x0, x, v, x0.copy(), inv_mass, floor,
         0.1, 0.0, 0.01, 0.05, 1,
     )  # fmt: skip
     assert np.linalg.norm(v[0]) <= 1.0 + 1e-12  # no more than the approach removed
@@ -210,8 +215,8 @@ def test_a_point_resting_on_an_obstacle_is_not_pushed_into_it():
     floor[:3] = [0.0, 0.0, 1.0]
     rows = np.array([[0, 3, 0]])
     self_collision.respond(
-        rows, np.arange(1), np.zeros(1, bool), triangles, edges, x0, x, v, x0.copy(), np.ones(4),
-        floor,
+        rows, np.arange(1), self_collision.pair_distances(rows, triangles, edges, x0), APART,
+        triangles, edges, x0, x, v, x0.copy(), np.ones(4), floor,
         0.1, 0.0, 0.01, 0.5, 1,
     )  # fmt: skip
     assert np.array_equal(x[:3], x0[:3]) and np.array_equal(v[:3], np.zeros((3, 3)))
@@ -228,8 +233,10 @@ def test_an_impulse_does_not_drive_a_point_resting_on_an_obstacle_into_it():
     v1 = (x1 - x0) / 0.1
     floor = np.zeros((4, 3))
     floor[:3] = [0.0, 0.0, 1.0]
-    count, moved = self_collision.impulses(
-        np.array([[0, 3, 0]]), np.arange(1), triangles, edges, x0, x1, v1, np.ones(4), floor,
+    rows = np.array([[0, 3, 0]])
+    gaps = self_collision.pair_distances(rows, triangles, edges, x0)
+    count, moved, _ = self_collision.impulses(
+        rows, np.arange(1), gaps, triangles, edges, x0, x1, v1, np.ones(4), floor,
         0.01, np.ones(4, bool),
     )  # fmt: skip
     assert count == 1 and moved.tolist() == [False, False, False, True]
@@ -316,9 +323,10 @@ def test_an_impulse_stops_a_point_falling_through_a_triangle_without_a_zone():
     v1 = (x1 - x0) / 0.1
     rows, inv_mass = np.array([[0, 3, 0]]), np.ones(4)
     assert self_collision.approaches(0, 3, 0, 1, 2, x0, x1, 0.01)
-    count, moved = self_collision.impulses(
+    count, moved, found = self_collision.impulses(
         rows,
         np.arange(1),
+        self_collision.pair_distances(rows, triangles, edges, x0),
         triangles,
         edges,
         x0,
@@ -329,7 +337,7 @@ def test_an_impulse_stops_a_point_falling_through_a_triangle_without_a_zone():
         0.01,
         np.ones(4, bool),
     )
-    assert count == 1 and moved.all()
+    assert count == found == 1 and moved.all()
     assert not self_collision.approaches(0, 3, 0, 1, 2, x0, x1, 0.01)
     # Inelastic, momentum kept: the point ends moving with the triangle's
     # point below it (weights 0.6, 0.2, 0.2), and no momentum was made.

@@ -192,6 +192,8 @@ class SelfCollision:
         self.reach = 0.5 * self.thickness
         self.triangles = grid_triangles(self.shape)
         self.edges = grid_edges(self.shape)
+        ny, nx = self.shape
+        self._cells = np.stack(np.divmod(np.arange(nx * ny), nx)[::-1], 1)  # (N, 2): column, row
         self.report = Report()
         self._anchor: np.ndarray | None = None  # (N, 3) m: where the list was built
         self._low = np.empty((0, 3))  # (N, 3) m: the box each point must stay in
@@ -229,17 +231,20 @@ class SelfCollision:
         floor = np.zeros_like(x1)  # per point: its obstacle's outward normal, or zero
         for contact in resting:
             floor[contact.index] = contact.normal
-        crease = creases(rows, self.triangles, self.edges, self.shape[1])
         contacts = respond(
-            rows, near, crease, self.triangles, self.edges, x0, x1, v1, start, inv_mass, floor,
-            d, self.friction, dt, reach, SWEEPS,
+            rows, near, self._gaps, self._cells, self.triangles, self.edges, x0, x1, v1, start,
+            inv_mass, floor, d, self.friction, dt, reach, SWEEPS,
         )  # fmt: skip
         fresh = np.ones(len(x0), np.bool_)
-        for _ in range(SWEEPS):
-            count, fresh = impulses(
-                rows, near, self.triangles, self.edges, x0, x1, v1, inv_mass, floor,
-                MARGIN * d, fresh,
+        clear = False
+        for sweep in range(SWEEPS):
+            count, fresh, found = impulses(
+                rows, near, self._gaps, self.triangles, self.edges, x0, x1, v1, inv_mass,
+                floor, MARGIN * d, fresh,
             )  # fmt: skip
+            # Nothing in the first sweep approaches: the zones' first pass
+            # would check the same pairs on the same paths and find the same.
+            clear = sweep == 0 and found == 0
             if not count:
                 break
             # The impulses may move points by more than the response's reach:
@@ -253,10 +258,11 @@ class SelfCollision:
             )
         zones = _zones(x0, x1, v1)
         checked = near
-        while True:
+        zoned, unresolved, done = 0, 0, clear
+        while not done:
             zoned, unresolved, done = impact_zones(
-                rows, checked, self.triangles, self.edges, x0, x1, v1, inv_mass, MARGIN * d,
-                zones, self._low, self._high,
+                rows, checked, self._gaps, self.triangles, self.edges, x0, x1, v1, inv_mass,
+                MARGIN * d, zones, self._low, self._high,
             )  # fmt: skip
             if done:
                 break
@@ -426,26 +432,6 @@ def screen(rows, gaps, anchor, x0, x1, triangles, edges, reach, thickness):  # p
 
 
 # -- broad phase ---------------------------------------------------------------
-
-
-@njit(cache=True)
-def creases(rows, triangles, edges, columns):  # pragma: no cover
-    """Per row, whether a point of its first primitive and one of its second
-    are at most one grid step apart (``columns`` points per grid row, point
-    ``i + columns j`` at column ``i``, row ``j``): two sides of a crease
-    through those points, not two layers."""
-    out = np.zeros(rows.shape[0], np.bool_)
-    for n in range(rows.shape[0]):
-        kind = rows[n, 0]
-        i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
-        # VF: point i0 and corners i1-i3; EE: ends i0, i1 and ends i2, i3.
-        first = (i0, i0) if kind == 0 else (i0, i1)
-        second = (i1, i2, i3) if kind == 0 else (i2, i3, i3)
-        for a in first:
-            for b in second:
-                if abs(a % columns - b % columns) <= 1 and abs(a // columns - b // columns) <= 1:
-                    out[n] = True
-    return out
 
 
 @njit(cache=True)
@@ -797,33 +783,91 @@ def _scale(weight, free, share):  # pragma: no cover
     return max(-1.0, min(1.0, weight * free / share))
 
 
+@njit(cache=True, inline="always")
+def _crease(kind, i0, i1, i2, i3, cells):  # pragma: no cover
+    """Whether a point of the pair's first primitive and one of its second
+    are at most one grid step apart (``cells`` (N, 2): each point's column
+    and row): two sides of a crease through those points, not two layers."""
+    # VF: point i0 and corners i1-i3; EE: ends i0, i1 and ends i2, i3.
+    first = (i0, i0) if kind == 0 else (i0, i1)
+    second = (i1, i2, i3) if kind == 0 else (i2, i3, i3)
+    for a in first:
+        for b in second:
+            if abs(cells[a, 0] - cells[b, 0]) <= 1 and abs(cells[a, 1] - cells[b, 1]) <= 1:
+                return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def _moved_apart(kind, i0, i1, i2, i3, x0, x):  # pragma: no cover
+    """Bound (m) on how much the pair's distance changed from ``x0`` to
+    ``x``: the largest motion of its points relative to its first point
+    (for two edges, the first edge's other end adds its own), as in
+    step 2 of the module docstring."""
+    d0 = _sub(x[i0], x0[i0])
+    r1 = _sub(_sub(x[i1], x0[i1]), d0)
+    r2 = _sub(_sub(x[i2], x0[i2]), d0)
+    r3 = _sub(_sub(x[i3], x0[i3]), d0)
+    m1 = math.sqrt(_dot(r1, r1))
+    m23 = math.sqrt(max(_dot(r2, r2), _dot(r3, r3)))
+    return max(m1, m23) if kind == 0 else m1 + m23
+
+
 # -- proximity response ------------------------------------------------------------
 
 
 @njit(cache=True)
 def respond(
-    rows, near, crease, triangles, edges, x0, x, v, start, inv_mass, floor,
+    rows, near, gaps, cells, triangles, edges, x0, x, v, start, inv_mass, floor,
     thickness, friction, dt, reach, sweeps,
 ):  # fmt: skip  # pragma: no cover
     """Push every pair ``rows[near]`` closer than ``thickness`` apart, in
     place on ``x`` and ``v`` (step 3 of the module docstring); no point ends
     farther than ``reach`` from ``start``, and none is pushed into the
     obstacle whose outward normal ``floor`` holds for it (zero: none).
-    A pair marked in ``crease`` (per row, from :func:`creases`) is two sides
-    of one fold, kept only ``CREASE`` thickness apart. Returns how many pair
-    pushes there were, summed over the sweeps."""
+    Two sides of one crease (points one grid step apart, ``cells`` (N, 2)
+    holding each point's column and row) are kept only ``CREASE``
+    thickness apart. Returns how many pair pushes there were, summed over
+    the sweeps.
+
+    A pair whose distance at ``x0`` (``gaps``, per listed pair, m), less
+    how far its points have moved relative to each other since, is still
+    the thickness is apart and needs no closest-point search.
+
+    A sweep after the first looks again only at pairs with a point that
+    moved since the pair was last looked at: the others would be found as
+    they were, apart, so skipping them changes nothing (a resting fold has
+    a few hundred touching pairs among tens of thousands listed)."""
     ids = np.empty(4, np.int64)
     free = np.empty(4)
     contacts = 0
-    for _ in range(sweeps):
+    clock = 1  # counts the looks; ``moved_at[i]``: the look that last moved point i
+    moved_at = np.zeros(x.shape[0], np.int64)
+    looked_at = np.zeros(near.shape[0], np.int64)
+    for sweep in range(sweeps):
         touched = 0
-        for n in near:
+        for m in range(near.shape[0]):
+            n = near[m]
             kind = rows[n, 0]
             i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
-            target = CREASE * thickness if crease[n] else thickness
-            w, normal, distance = _contact(kind, i0, i1, i2, i3, x, x, 0.0, x0, thickness)
-            if distance >= target or normal[0] == normal[1] == normal[2] == 0.0:
+            if sweep > 0:
+                last = max(max(moved_at[i0], moved_at[i1]), max(moved_at[i2], moved_at[i3]))
+                if last < looked_at[m]:
+                    continue
+            clock += 1
+            looked_at[m] = clock
+            # (The bound is taken a little short, so that rounding cannot
+            # skip a pair the search would have found within the thickness.)
+            if gaps[n] - _moved_apart(kind, i0, i1, i2, i3, x0, x) > thickness * (1.0 + 1e-9):
                 continue
+            w, normal, distance = _contact(kind, i0, i1, i2, i3, x, x, 0.0, x0, thickness)
+            if distance >= thickness or normal[0] == normal[1] == normal[2] == 0.0:
+                continue
+            target = thickness
+            if _crease(kind, i0, i1, i2, i3, cells):
+                target = CREASE * thickness
+                if distance >= target:
+                    continue
             ids[0], ids[1], ids[2], ids[3] = i0, i1, i2, i3
             share = _free(w, normal, ids, inv_mass, floor, free)
             if share == 0.0:
@@ -849,6 +893,7 @@ def respond(
                 scale = _scale(w[k], free[k], share)
                 if scale == 0.0:
                     continue
+                moved_at[i] = clock
                 far2 = 0.0
                 for a in range(3):
                     dv = approach * normal[a] - stop * tangent[a]
@@ -873,6 +918,16 @@ def first_touch(kind, i0, i1, i2, i3, x0, x1, margin):  # pragma: no cover
     """Share ``s`` of the step ``x0 -> x1`` at which the pair's distance may
     first fall below the margin (step 4 of the module docstring), or -1.0
     when it is proven not to."""
+    _, gap = _closest(kind, i0, i1, i2, i3, x0, x1, 0.0)
+    distance = math.sqrt(_dot(gap, gap))
+    return _advance(kind, i0, i1, i2, i3, x0, x1, margin, distance)
+
+
+@njit(cache=True)
+def _advance(kind, i0, i1, i2, i3, x0, x1, margin, distance):  # pragma: no cover
+    """:func:`first_touch` given the pair's ``distance`` (m) at ``x0``: the
+    pair list holds it (:func:`pair_distances`), so the many pairs that are
+    cleared at once cost no closest-point search."""
     # The distance does not change under a common translation, so motions
     # are taken relative to the first point's: a pair moving together is
     # cleared at once.
@@ -887,8 +942,6 @@ def first_touch(kind, i0, i1, i2, i3, x0, x1, margin):  # pragma: no cover
         lipschitz = max(m1, max(m2, m3))
     else:
         lipschitz = m1 + max(m2, m3)
-    _, gap = _closest(kind, i0, i1, i2, i3, x0, x1, 0.0)
-    distance = math.sqrt(_dot(gap, gap))
     if distance <= 0.0:
         return 0.0
     eta = min(margin, 0.5 * distance)
@@ -916,7 +969,7 @@ def approaches(kind, i0, i1, i2, i3, x0, x1, margin):  # pragma: no cover
 
 @njit(cache=True)
 def impulses(
-    rows, near, triangles, edges, x0, x1, v1, inv_mass, floor, margin, fresh
+    rows, near, gaps, triangles, edges, x0, x1, v1, inv_mass, floor, margin, fresh
 ):  # pragma: no cover
     """One sweep before the impact zones: for each pair of ``rows[near]``
     with a ``fresh`` point that comes within the margin during the step,
@@ -925,8 +978,9 @@ def impulses(
     impulse, Bridson et al. 2002, section 7.4), in place on ``x1`` and
     ``v1``. Most contacts end here, each pair on its own, so fewer and
     smaller zones are needed. Like :func:`respond`, it does not drive a
-    point into the obstacle whose normal ``floor`` holds for it. Returns
-    ``(impulses, points moved)``."""
+    point into the obstacle whose normal ``floor`` holds for it. ``gaps``
+    holds each listed pair's distance (m) at ``x0``. Returns ``(impulses,
+    points moved, pairs found approaching)``."""
     moved = np.zeros(x0.shape[0], np.bool_)
     ids = np.empty(4, np.int64)
     free = np.empty(4)
@@ -940,14 +994,14 @@ def impulses(
         i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
         if not (fresh[i0] or fresh[i1] or fresh[i2] or fresh[i3]):
             continue
-        if first_touch(kind, i0, i1, i2, i3, x0, x1, margin) >= 0.0:
+        if _advance(kind, i0, i1, i2, i3, x0, x1, margin, gaps[n]) >= 0.0:
             touching[found] = n
             found += 1
     count = 0
     for n in touching[:found]:
         kind = rows[n, 0]
         i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
-        s = first_touch(kind, i0, i1, i2, i3, x0, x1, margin)
+        s = _advance(kind, i0, i1, i2, i3, x0, x1, margin, gaps[n])
         if s < 0.0:
             continue
         w, normal, _ = _contact(kind, i0, i1, i2, i3, x0, x1, s, x0, margin)
@@ -975,7 +1029,7 @@ def impulses(
                 x1[i, a] -= scale * closing * normal[a]
                 if speed < 0.0:
                     v1[i, a] -= scale * speed * normal[a]
-    return count, moved
+    return count, moved, found
 
 
 @njit(cache=True)
@@ -1002,13 +1056,14 @@ def _one_zone(i0, i1, i2, i3, zoned, parent, dirty):  # pragma: no cover
 
 @njit(cache=True)
 def impact_zones(
-    rows, near, triangles, edges, x0, x1, v1, inv_mass, margin, zones, low, high
+    rows, near, gaps, triangles, edges, x0, x1, v1, inv_mass, margin, zones, low, high
 ):  # pragma: no cover
     """Join the free points of every approaching pair into a zone that moves
     as one over the step, until no pair approaches (step 4 of the module
     docstring); a zone an approach with pinned points still reaches is held
     at the start of the step. The first pass checks the pairs ``rows[near]``,
-    later ones every listed pair with a point the zones moved. ``zones``
+    later ones every listed pair with a point the zones moved (``gaps``:
+    each listed pair's distance at ``x0``, m). ``zones``
     (from :func:`_zones`) carries the zones between calls. If a zone
     carried a point out of its box ``low``-``high``, the list may have
     missed a pair of it: the call returns unfinished, and the caller lists
@@ -1031,7 +1086,7 @@ def impact_zones(
                 continue
             if _one_zone(i0, i1, i2, i3, zoned, parent, dirty):
                 continue  # one translation moved all four: the distance is kept
-            if not approaches(kind, i0, i1, i2, i3, x0, x1, margin):
+            if _advance(kind, i0, i1, i2, i3, x0, x1, margin, gaps[n]) < 0.0:
                 continue
             here = False
             first = -1
