@@ -177,8 +177,9 @@ def test_a_zone_its_own_pairs_meet_twice_in_one_pass_moves_and_is_not_held():
     zones = self_collision._zones(x0, x1, v1)
     everywhere = np.full((4, 3), -10.0), np.full((4, 3), 10.0)  # boxes: no list is needed
     zoned, unresolved, done = self_collision.impact_zones(
-        rows, np.arange(2), triangles, edges, x0, x1, v1, inv_mass, 0.01, zones, *everywhere
-    )
+        rows, np.arange(2), self_collision.pair_distances(rows, triangles, edges, x0), triangles,
+        edges, x0, x1, v1, inv_mass, 0.01, zones, *everywhere,
+    )  # fmt: skip
     assert zoned == 4 and unresolved == 0 and done
     # All four move by their mean motion (2 m down shared by four): a
     # translation, so no distance changed, and the mean velocity.
