@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pvcloth.physics.simulation import STABLE_SHARE
+from pvcloth.physics.simulation import FRAME_DT, STABLE_SHARE
 
 if TYPE_CHECKING:  # for annotations only
     from pvcloth.physics.simulation import Simulation
@@ -57,11 +57,14 @@ def describe(sim: Simulation) -> str:
         )
     )
     stable = sim.stable_dt()
+    contact = sim.contact_step()  # infinite without self-collision
     if sim.dt_source == "auto":
-        frame = math.isinf(stable)
-        origin = "automatic: " + (
-            "one 1/60 s frame" if frame else "at most half the stable step, dividing 1/60 s"
-        )
+        if contact < min(FRAME_DT, 0.5 * stable):
+            origin = "automatic: under the self-collision step, dividing 1/60 s"
+        elif math.isinf(stable):
+            origin = "automatic: one 1/60 s frame"
+        else:
+            origin = "automatic: at most half the stable step, dividing 1/60 s"
     elif sim.dt_source == "substep":
         origin = f"substeps of the given {sim.requested_dt:.4g} s"
     elif sim.dt_source == "adaptive":
@@ -73,6 +76,11 @@ def describe(sim: Simulation) -> str:
         )
     else:
         origin = "as given"
+    if contact < FRAME_DT:
+        origin += (
+            f"; self-collision holds a layer up on another only in steps under {contact:.3g} s "
+            f"(one step's fall under gravity within what its response may move a point)"
+        )
     lines.append(
         f"integrator  {sim.integrator.name} (order {sim.integrator.order}: "
         f"{sim.integrator.description}), dt = {sim.dt:.4g} s ({origin})"

@@ -173,7 +173,8 @@ class Simulation:
     def dt_source(self) -> str:
         """Where ``dt`` comes from: ``"auto"`` (at most half the stable step),
         ``"given"`` (the scene or an override) or ``"substep"`` (the given
-        step split into equal substeps for stability)."""
+        step split into equal substeps for stability, or for
+        self-collision: :meth:`contact_step`)."""
         if self.controller is not None:
             return "adaptive"
         if self.requested_dt is None:
@@ -185,16 +186,16 @@ class Simulation:
         against the stable step as ``policy`` says (with a tolerance, ``dt`` is
         only the first step the controller tries: not checked)."""
         if self.scene.solver.tolerance is not None and dt is not None:
-            return min(dt, self.scene.solver.max_dt or MAX_STEP)
+            return min(dt, self.scene.solver.max_dt or MAX_STEP, self.contact_step())
         if dt is None:
             return self.automatic_dt()
         if policy == "ignore":
-            return dt
+            return self._split_for_contact(dt)
         limit = self._positive_stable_dt()
         if dt <= STABLE_SHARE * limit:
-            return dt
+            return self._split_for_contact(dt)
         if policy == "substep":
-            return dt / math.ceil(dt / (SAFE_SHARE * limit))
+            return self._split_for_contact(dt / math.ceil(dt / (SAFE_SHARE * limit)))
         raise SceneError(
             "solver.dt",
             f"{dt:.4g} s is above the largest stable step allowed for {self.integrator.name} "
@@ -207,10 +208,25 @@ class Simulation:
 
     def automatic_dt(self) -> float:
         """The step ``solver.dt`` left out gives: the largest that is at most
-        half the stable step and divides a 1/60 s frame (whole steps per
-        frame, so that advancing by frames lands exactly on them)."""
-        limit = self._positive_stable_dt()
-        return FRAME_DT / max(1, math.ceil(FRAME_DT / (SAFE_SHARE * limit)))
+        half the stable step (and the :meth:`contact_step`) and divides a
+        1/60 s frame (whole steps per frame, so that advancing by frames
+        lands exactly on them)."""
+        limit = min(SAFE_SHARE * self._positive_stable_dt(), self.contact_step())
+        return FRAME_DT / max(1, math.ceil(FRAME_DT / limit))
+
+    def contact_step(self) -> float:
+        """The longest step (s) self-collision can hold one layer up on
+        another in (:meth:`SelfCollision.longest_step
+        <pvcloth.physics.self_collision.SelfCollision.longest_step>`); a
+        longer step is split into equal substeps under it, whatever the
+        stability policy. Infinite without ``[self_collision]``."""
+        contact = self.model.self_collision
+        if contact is None:
+            return math.inf
+        return contact.longest_step(math.hypot(*self.scene.gravity))
+
+    def _split_for_contact(self, dt: float) -> float:
+        return dt / max(1, math.ceil(dt / self.contact_step() - 1e-9))
 
     def _positive_stable_dt(self) -> float:
         limit = self.stable_dt()
@@ -553,8 +569,10 @@ class Simulation:
         if (solver.integrator, solver.iterations) != (self.integrator.name, was.iterations):
             self.integrator = get_integrator(solver.integrator, solver.iterations)
         # The stable step depends on the springs, air damping and the
-        # integrator, not on gravity or wind: only those re-check the step.
+        # integrator, not on wind; gravity sets the contact step.
         step_depends = ("springs", "air_damping", "solver")
+        if scene.self_collision is not None:
+            step_depends += ("gravity",)
         if any(getattr(scene, name) != getattr(self.scene, name) for name in step_depends):
             try:
                 current, self.scene = self.scene, scene  # the step rule reads the new solver
@@ -799,7 +817,7 @@ class Simulation:
                 f"leave solver.tolerance out for fixed steps",
             )
         solver = self.scene.solver
-        largest = solver.max_dt or MAX_STEP
+        largest = min(solver.max_dt or MAX_STEP, self.contact_step())
         limit = self.stable_dt()
         if math.isfinite(limit) and limit > 0.0:
             # An explicit step beyond its stable one would only be rejected
@@ -810,7 +828,8 @@ class Simulation:
                 "solver.min_dt",
                 f"{solver.min_dt:g} s leaves no room under the largest step "
                 f"{self.integrator.name} may take here, {largest:.3g} s (0.8 of its stable "
-                f"step, or solver.max_dt); give at most {0.5 * largest:.3g} s or leave it out",
+                f"step, solver.max_dt or the self-collision step); give at most "
+                f"{0.5 * largest:.3g} s or leave it out",
             )
         smallest = min(solver.min_dt or MIN_STEP, 0.5 * largest)
         first = min(self.dt, largest)
