@@ -4,13 +4,17 @@ Written for the self-collision tests, separately from any code under test
 and as plainly as possible: every pair of the grid's triangles that share
 no vertex is tested, after a bounding-box cull, by crossing each edge of
 one with the other (two triangles in general position intersect exactly
-when an edge of one of them crosses the other). No spatial hash, no
-continuous collision detection: slow, but hard to get wrong.
+when an edge of one of them crosses the other). Candidate pairs come from
+SciPy's k-d tree on the triangles' centroids, within twice the largest
+triangle's reach (a bound that holds for any shape; checked against every
+pair in ``tests/test_intersections.py``). No continuous collision
+detection: plain, and hard to get wrong.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 
 def grid_triangles(nx: int, ny: int) -> np.ndarray:
@@ -40,31 +44,39 @@ def _segments_cross(p, q, a, b, c, eps=1e-12) -> np.ndarray:
     return ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t >= 0) & (t <= 1)
 
 
-def intersecting_pairs(positions: np.ndarray, triangles: np.ndarray, block: int = 256):
-    """Index pairs ``(k, l)`` (``k < l``) of triangles that share no vertex and
-    intersect. ``positions`` (N, 3) in metres, ``triangles`` (T, 3)."""
-    corners = positions[triangles]  # (T, 3, 3)
+def _candidates(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs ``(k, l)`` (``k < l``) of triangles that may touch: any
+    point of a triangle lies within ``R`` of its centroid (``R`` its farthest
+    corner), so two triangles that touch have centroids at most
+    ``R_k + R_l <= 2 max R`` apart; SciPy's k-d tree lists those pairs.
+    Their boxes must overlap too."""
+    centroids = corners.mean(axis=1)
+    radius = np.linalg.norm(corners - centroids[:, None], axis=2).max()
+    pairs = cKDTree(centroids).query_pairs(2.0 * radius * (1.0 + 1e-9), output_type="ndarray")
+    k, m = pairs[:, 0], pairs[:, 1]
     low, high = corners.min(axis=1), corners.max(axis=1)
-    found = []
-    for start in range(0, len(triangles), block):
-        rows = np.arange(start, min(start + block, len(triangles)))
-        # boxes that overlap, each pair once (l > k)
-        overlap = np.all((low[rows, None] <= high[None]) & (low[None] <= high[rows, None]), axis=2)
-        overlap &= np.arange(len(triangles))[None] > rows[:, None]
-        k, m = np.nonzero(overlap)
-        k = rows[k]
-        shared = (triangles[k][:, :, None] == triangles[m][:, None, :]).any(axis=(1, 2))
-        k, m = k[~shared], m[~shared]
-        if k.size == 0:
-            continue
-        hit = np.zeros(k.size, bool)
-        for one, other in ((k, m), (m, k)):
-            a, b, c = (corners[other][:, n] for n in range(3))
-            for e in range(3):
-                p, q = corners[one][:, e], corners[one][:, (e + 1) % 3]
-                hit |= _segments_cross(p, q, a, b, c)
-        found.append(np.stack([k[hit], m[hit]], axis=1))
-    return np.concatenate(found) if found else np.zeros((0, 2), int)
+    overlap = np.all((low[k] <= high[m]) & (low[m] <= high[k]), axis=1)
+    return k[overlap], m[overlap]
+
+
+def intersecting_pairs(positions: np.ndarray, triangles: np.ndarray, candidates=None):
+    """Index pairs ``(k, l)`` (``k < l``) of triangles that share no vertex and
+    intersect, sorted. ``positions`` (N, 3) in metres, ``triangles`` (T, 3);
+    ``candidates`` ``(k, l)`` arrays of the pairs to test (default: those
+    :func:`_candidates` finds)."""
+    corners = positions[triangles]  # (T, 3, 3)
+    k, m = _candidates(corners) if candidates is None else candidates
+    k, m = np.minimum(k, m), np.maximum(k, m)
+    shared = (triangles[k][:, :, None] == triangles[m][:, None, :]).any(axis=(1, 2))
+    k, m = k[~shared], m[~shared]
+    hit = np.zeros(k.size, bool)
+    for one, other in ((k, m), (m, k)):
+        a, b, c = (corners[other][:, n] for n in range(3))
+        for e in range(3):
+            p, q = corners[one][:, e], corners[one][:, (e + 1) % 3]
+            hit |= _segments_cross(p, q, a, b, c)
+    found = np.stack([k[hit], m[hit]], axis=1)
+    return found[np.lexsort((found[:, 1], found[:, 0]))]
 
 
 def count_self_intersections(positions: np.ndarray, resolution: tuple[int, int]) -> int:

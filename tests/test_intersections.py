@@ -75,3 +75,17 @@ def test_a_sheet_folded_through_itself_is_caught(n):
     clear = folded.copy()
     clear[far, 2] += 0.3
     assert count_self_intersections(clear, (n, n)) == 0
+
+
+@pytest.mark.parametrize("spread", [0.02, 0.3, 1.0])
+def test_the_candidate_search_misses_no_pair_of_all_pairs(spread):
+    # A 12x12 grid jittered from gently to wildly (long thin triangles
+    # included): the pairs found equal those of every pair tested.
+    rng = np.random.default_rng(3)
+    positions = flat_grid(12) + spread * rng.standard_normal((144, 3))
+    triangles = grid_triangles(12, 12)
+    every = np.triu_indices(len(triangles), 1)
+    expected = intersecting_pairs(positions, triangles, candidates=every)
+    if spread > 0.1:
+        assert len(expected) > 100
+    assert np.array_equal(intersecting_pairs(positions, triangles), expected)
