@@ -307,23 +307,31 @@ def _first_intersection(sim, drive, seconds: float, stop_at_first: bool) -> tupl
     return worst, unresolved
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize(
-    "name, seconds",
-    [
+#: ``(scene, seconds, points per side)``. The drape at 64x64 is left out: its
+#: finer skirt folds without passing through itself even with nothing to stop
+#: it (none in 2 s), so it would prove nothing.
+FOLDING = [
+    (name, seconds, n)
+    for n in (32, 64)
+    for name, seconds in [
         ("crumple", 1.5),
         ("corner drag", 1.0),
         ("twist", 1.5),
         ("towel fold", 2.0),
         ("sphere drape", 2.0),
-    ],
-)
-def test_a_cloth_piled_dragged_twisted_or_folded_onto_itself_never_intersects(name, seconds):
+    ]
+    if (name, n) != ("sphere drape", 64)
+]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name, seconds, n", FOLDING)
+def test_a_cloth_piled_dragged_twisted_or_folded_onto_itself_never_intersects(name, seconds, n):
     from contact_scenes import ALL
 
-    without, _ = _first_intersection(*ALL[name](32, "fast_mass_spring", False), seconds, True)
+    without, _ = _first_intersection(*ALL[name](n, "fast_mass_spring", False), seconds, True)
     assert without > 0  # the scene does pass through itself when nothing stops it
-    sim, drive = ALL[name](32, "fast_mass_spring", True)
+    sim, drive = ALL[name](n, "fast_mass_spring", True)
     assert _first_intersection(sim, drive, seconds, False) == (0, 0)
 
 
