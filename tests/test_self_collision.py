@@ -378,15 +378,18 @@ def test_a_step_that_would_list_too_many_pairs_is_refused_with_a_clear_error(mon
         contact.resolve(x0, x1, (x1 - x0) / 0.01, np.ones(64), 0.01)
 
 
-def test_a_folded_towel_at_rest_does_not_chatter():
+@pytest.mark.parametrize("n", [32, pytest.param(64, marks=pytest.mark.slow)])
+def test_a_folded_towel_at_rest_does_not_chatter(n):
     # The towel of examples/fold_a_towel.py, let go at 1 s, over its third
     # second. Layers that chatter gain about one step of gravity every step:
     # the bound is a hundredth of that, the kinetic energy of the whole cloth
     # after one step of free fall, (1/2) M (g dt)^2. (Pushing the two sides
-    # of the crease a whole thickness apart gave ~5e-5 J here, twice over.)
+    # of the crease a whole thickness apart gave ~5e-5 J here, twice over;
+    # at 64x64, steps of 1/60 s, longer than the contact step, never let
+    # it rest.)
     from contact_scenes import towel_fold
 
-    sim, drive = towel_fold(32, "fast_mass_spring")
+    sim, drive = towel_fold(n, "fast_mass_spring")
     mass = sim.scene.cloth.mass
     bound = 0.01 * 0.5 * mass * (9.81 * sim.dt) ** 2
     worst = 0.0
@@ -457,3 +460,20 @@ def test_every_integrator_keeps_a_folded_towel_from_passing_through_itself(integ
         contacts += sim.model.self_collision.report.contacts
     assert worst == 0
     assert contacts > 100  # the layers did press on each other
+
+
+@pytest.mark.parametrize("n, steps_per_frame", [(32, 1), (64, 2), (128, 2)])
+def test_steps_are_split_so_one_step_of_gravity_stays_within_the_reach(n, steps_per_frame):
+    # A 1 m cloth: thickness 0.3 of the grid's closest gap, the response's
+    # reach half of that; a layer falls g dt^2 in a step from rest.
+    scene = load_scene(ROOT / "data" / "scenes" / "ground.toml").with_resolution(n)
+    scene = scene.with_overrides({"solver.integrator": "fast_mass_spring", "solver.dt": None})
+    sim = Simulation(scene.replace(self_collision=SelfCollisionSpec()))
+    reach = 0.5 * 0.3 * (1.0 / (n - 1)) / np.sqrt(2.0)
+    assert sim.model.self_collision.reach == pytest.approx(reach)
+    assert 9.81 * sim.dt**2 <= reach
+    assert sim.dt == pytest.approx(1.0 / 60.0 / steps_per_frame)
+    # A given step is split the same way; without the table nothing is.
+    given = Simulation(scene.replace(self_collision=SelfCollisionSpec()), dt=1.0 / 60.0)
+    assert given.dt == sim.dt and given.dt_source == ("given" if n == 32 else "substep")
+    assert Simulation(scene).dt == pytest.approx(1.0 / 60.0)
