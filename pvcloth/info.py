@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pvcloth.physics.simulation import FRAME_DT, STABLE_SHARE
+from pvcloth.physics.simulation import FRAME_DT, SAFE_SHARE, STABLE_SHARE
 
 if TYPE_CHECKING:  # for annotations only
     from pvcloth.physics.simulation import Simulation
@@ -59,7 +59,7 @@ def describe(sim: Simulation) -> str:
     stable = sim.stable_dt()
     contact = sim.contact_step()  # infinite without self-collision
     if sim.dt_source == "auto":
-        if contact < min(FRAME_DT, 0.5 * stable):
+        if contact < min(FRAME_DT, SAFE_SHARE * stable):
             origin = "automatic: under the self-collision step, dividing 1/60 s"
         elif math.isinf(stable):
             origin = "automatic: one 1/60 s frame"

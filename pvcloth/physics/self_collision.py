@@ -281,10 +281,10 @@ class SelfCollision:
             near = screen(
                 rows, self._gaps, self._anchor, x0, x1, self.triangles, self.edges, 0.0, d
             )
-        zones = _zones(x0, x1, v1)
+        zoned = unresolved = 0
         checked = near
-        zoned, unresolved, done = 0, 0, clear
-        while not done:
+        zones = None if clear else _zones(x0, x1, v1)
+        while zones is not None:
             zoned, unresolved, done = impact_zones(
                 rows, checked, self._gaps, self.triangles, self.edges, x0, x1, v1, inv_mass,
                 MARGIN * d, zones, self._low, self._high,
@@ -857,7 +857,7 @@ def respond(
 
     A pair whose distance at ``x0`` (``gaps``, per listed pair, m), less
     how far its points have moved relative to each other since, is still
-    the thickness is apart and needs no closest-point search.
+    over the thickness needs no closest-point search.
 
     A sweep after the first looks again only at pairs with a point that
     moved since the pair was last looked at: the others would be found as
@@ -955,18 +955,8 @@ def _advance(kind, i0, i1, i2, i3, x0, x1, margin, distance):  # pragma: no cove
     cleared at once cost no closest-point search."""
     # The distance does not change under a common translation, so motions
     # are taken relative to the first point's: a pair moving together is
-    # cleared at once.
-    d0 = _sub(x1[i0], x0[i0])
-    r1 = _sub(_sub(x1[i1], x0[i1]), d0)
-    r2 = _sub(_sub(x1[i2], x0[i2]), d0)
-    r3 = _sub(_sub(x1[i3], x0[i3]), d0)
-    m1 = math.sqrt(_dot(r1, r1))
-    m2 = math.sqrt(_dot(r2, r2))
-    m3 = math.sqrt(_dot(r3, r3))
-    if kind == 0:  # Lipschitz constant of the distance over the step
-        lipschitz = max(m1, max(m2, m3))
-    else:
-        lipschitz = m1 + max(m2, m3)
+    # cleared at once. This bound is the distance's Lipschitz constant in s.
+    lipschitz = _moved_apart(kind, i0, i1, i2, i3, x0, x1)
     if distance <= 0.0:
         return 0.0
     eta = min(margin, 0.5 * distance)
