@@ -69,11 +69,22 @@ class RealTimeMeter:
 
     @property
     def fraction(self) -> float | None:
-        """Measured real-time fraction, or ``None`` before there is a span."""
+        """Measured real-time fraction, or ``None`` before there is a span.
+
+        The span is the last :data:`MEASURE_WINDOW` seconds exactly: when
+        no sample falls at its start (the physics thread was held up there),
+        the cloth time at the start is interpolated between the samples on
+        either side. Taking the older sample instead stretched the span over
+        the hold-up, and once showed x0.90 where the last second ran at x1.10.
+        """
         samples = list(self.samples)  # the physics thread may append meanwhile
         if len(samples) < 2:
             return None
         (w0, t0), (w1, t1) = samples[0], samples[-1]
+        start = w1 - MEASURE_WINDOW
+        if w0 < start:
+            (wa, ta), (wb, tb) = samples[0], samples[1]
+            w0, t0 = start, ta + (tb - ta) * (start - wa) / (wb - wa) if wb > wa else tb
         return (t1 - t0) / (w1 - w0) if w1 - w0 >= 0.2 else None
 
 
