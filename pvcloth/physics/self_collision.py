@@ -107,8 +107,9 @@ import numpy as np
 from pvcloth.errors import DivergenceError
 
 try:
-    from numba import njit
+    from numba import njit, prange
 except ImportError:  # pragma: no cover - exercised only where numba is missing
+    prange = range
 
     def njit(*args, **kwargs):
         if args and callable(args[0]):
@@ -413,11 +414,17 @@ def inside(low, high, x0, x1, reach):  # pragma: no cover
     return True
 
 
-@njit(cache=True)
+# The passes over every listed pair, each pair on its own, run on numba's
+# threads (as many as the calling thread allows: one in the window's
+# physics thread, see pvcloth.physics.kernels.use_threads); the results do
+# not depend on how many.
+
+
+@njit(cache=True, parallel=True)
 def pair_distances(rows, triangles, edges, x):  # pragma: no cover
     """Distance (m) between the two primitives of every pair at ``x``."""
     gaps = np.empty(rows.shape[0])
-    for n in range(rows.shape[0]):
+    for n in prange(rows.shape[0]):
         kind = rows[n, 0]
         i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
         _, gap = _closest(kind, i0, i1, i2, i3, x, x, 0.0)
@@ -437,23 +444,20 @@ def _relative(anchor, x0, x1, k, ref, reach):  # pragma: no cover
     return math.sqrt(start) + math.sqrt(motion) + 2.0 * reach
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def screen(rows, gaps, anchor, x0, x1, triangles, edges, reach, thickness):  # pragma: no cover
     """Indices of the listed pairs that may come within ``thickness``
     during the step or its response (step 2 of the module docstring)."""
-    near = np.empty(rows.shape[0], np.int64)
-    count = 0
-    for n in range(rows.shape[0]):
+    keep = np.empty(rows.shape[0], np.bool_)
+    for n in prange(rows.shape[0]):
         kind = rows[n, 0]
         i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
         r1 = _relative(anchor, x0, x1, i1, i0, reach)
         r2 = _relative(anchor, x0, x1, i2, i0, reach)
         r3 = _relative(anchor, x0, x1, i3, i0, reach)
         bound = max(r1, max(r2, r3)) if kind == 0 else r1 + max(r2, r3)
-        if gaps[n] - bound < thickness:
-            near[count] = n
-            count += 1
-    return near[:count]
+        keep[n] = gaps[n] - bound < thickness
+    return np.nonzero(keep)[0]
 
 
 # -- broad phase ---------------------------------------------------------------
@@ -485,13 +489,13 @@ def contains(outer_lo, outer_hi, lo, hi):  # pragma: no cover
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def overlapping(rows, lo, hi, triangles, edges):  # pragma: no cover
     """The rows whose two primitives' boxes overlap, in their order; the box
     of a triangle or edge is the union of its points' boxes ``lo``-``hi``,
     as in :func:`box_pairs`."""
     keep = np.empty(rows.shape[0], np.bool_)
-    for n in range(rows.shape[0]):
+    for n in prange(rows.shape[0]):
         kind = rows[n, 0]
         i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
         overlap = True
@@ -982,6 +986,20 @@ def approaches(kind, i0, i1, i2, i3, x0, x1, margin):  # pragma: no cover
     return first_touch(kind, i0, i1, i2, i3, x0, x1, margin) >= 0.0
 
 
+@njit(cache=True, parallel=True)
+def _approaching(rows, near, gaps, triangles, edges, x0, x1, margin, fresh):  # pragma: no cover
+    """Per pair of ``rows[near]``, whether it has a ``fresh`` point and may
+    come within the margin during the step (:func:`first_touch`)."""
+    out = np.zeros(near.shape[0], np.bool_)
+    for m in prange(near.shape[0]):
+        n = near[m]
+        kind = rows[n, 0]
+        i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
+        if fresh[i0] or fresh[i1] or fresh[i2] or fresh[i3]:
+            out[m] = _advance(kind, i0, i1, i2, i3, x0, x1, margin, gaps[n]) >= 0.0
+    return out
+
+
 @njit(cache=True)
 def impulses(
     rows, near, gaps, triangles, edges, x0, x1, v1, inv_mass, floor, margin, fresh
@@ -1002,18 +1020,10 @@ def impulses(
     # Which pairs take part is settled before any moves: the list may hold
     # more pairs than these (they are proven apart), and a move made here
     # must not decide whether such a pair is looked at.
-    touching = np.empty(near.shape[0], np.int64)
-    found = 0
-    for n in near:
-        kind = rows[n, 0]
-        i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
-        if not (fresh[i0] or fresh[i1] or fresh[i2] or fresh[i3]):
-            continue
-        if _advance(kind, i0, i1, i2, i3, x0, x1, margin, gaps[n]) >= 0.0:
-            touching[found] = n
-            found += 1
+    touching = near[_approaching(rows, near, gaps, triangles, edges, x0, x1, margin, fresh)]
+    found = touching.shape[0]
     count = 0
-    for n in touching[:found]:
+    for n in touching:
         kind = rows[n, 0]
         i0, i1, i2, i3 = _corners(kind, rows[n, 1], rows[n, 2], triangles, edges)
         s = _advance(kind, i0, i1, i2, i3, x0, x1, margin, gaps[n])
