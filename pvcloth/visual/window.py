@@ -55,7 +55,7 @@ KEYS = {
     "i": "next integrator (with its own step)",
     "bracketleft": "[ halve the step",
     "bracketright": "] double the step",
-    "a": "automatic step (half the stable step, or 1/60 s)",
+    "a": "automatic step (a whole part of 1/60 s: stable, holds contact)",
     "w": "wind on / off",
     "k": "screenshot (file name shown)",
     "u": "unpin points pinned by dragging",
@@ -458,8 +458,10 @@ class ClothApp:
         self.request(self.sim.set_wind, None if blowing else self._wind)
 
     def cycle_integrator(self):
-        """The next integrator, at its own automatic step (1/60 s for the
-        implicit ones, half the stable step for explicit ones); the
+        """The next integrator, at its own automatic step (1/60 s split
+        under half its stable step and, with self-collision, the contact
+        step: see :meth:`Simulation.automatic_dt
+        <pvcloth.physics.simulation.Simulation.automatic_dt>`); the
         measuring-only ones (``backward_euler``) are left out, and with a
         tolerance those that cannot measure their error (every key press
         would be refused)."""
