@@ -244,8 +244,8 @@ def test_the_status_shows_the_real_time_fraction_a_clock_measures(app):
     over wall seconds, as the test's own clock measures it.
 
     At real time the physics thread is held up once for a quarter second
-    just before the last second starts, as a busy machine or a garbage
-    collection did in CI: it catches up inside the last second, and the
+    just before the last second starts, as something did in CI's full runs
+    (what, was not found): it catches up inside the last second, and the
     figure shown must still be that second's."""
     from pvcloth.visual.window_physics import MEASURE_WINDOW
 

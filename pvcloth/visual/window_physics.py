@@ -82,9 +82,10 @@ class RealTimeMeter:
             return None
         (w0, t0), (w1, t1) = samples[0], samples[-1]
         start = w1 - MEASURE_WINDOW
-        if w0 < start:
+        if w0 < start:  # add() keeps the second sample inside the span
             (wa, ta), (wb, tb) = samples[0], samples[1]
-            w0, t0 = start, ta + (tb - ta) * (start - wa) / (wb - wa) if wb > wa else tb
+            t0 = ta + (tb - ta) * (start - wa) / (wb - wa)
+            w0 = start
         return (t1 - t0) / (w1 - w0) if w1 - w0 >= 0.2 else None
 
 
