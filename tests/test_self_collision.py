@@ -365,15 +365,15 @@ def test_a_cloth_piled_dragged_twisted_or_folded_onto_itself_never_intersects(na
 
 
 #: Steps each explicit integrator takes from the pressed state (its usual
-#: step is 10 to 600 times shorter than fast_mass_spring's); implicit ones
+#: step is 35 to 650 times shorter than fast_mass_spring's); implicit ones
 #: run this long (s): backward Euler, the reference solved to convergence,
 #: takes up to 13 s a step in these scenes at 32x32, so it runs 0.1 s, and
 #: not at 64x64 (a minute a step or more).
 EXPLICIT_STEPS = 150
 IMPLICIT_SECONDS = {"implicit_euler": 0.3, "backward_euler": 0.1}
 #: backward_euler's Newton iterations stall here at its 1/60 s step, 0.007
-#: m/s^2 short of its 0.001 m/s^2 tolerance after 200 iterations (at 0.7 s,
-#: springs crushed in the pile): a limit of that solver, which raises
+#: m/s^2 short of its 0.001 m/s^2 tolerance after 200 iterations (the
+#: drag at 0.7 s, springs crushed in the pile): a limit of that solver, which raises
 #: rather than return an unconverged step; self-collision never ran wrong.
 NEWTON_STALLS = pytest.mark.xfail(
     raises=DivergenceError, strict=True, reason="backward_euler's Newton stalls on a crushed pile"
