@@ -1,5 +1,6 @@
 """Start-up cost: ``import pvcloth`` and the first frame, with and without the
-compiled kernels' on-disk cache.
+compiled kernels' on-disk cache, for the hanging scene and for a scene with
+self-collision (``fold.toml``, whose kernels compile on its first step).
 
 Each measurement is a fresh Python process (median of 5). "Cold" points
 numba's cache at an empty directory, so the kernels are compiled; "warm"
@@ -20,14 +21,19 @@ import numpy as np
 from smoke import SMOKE
 
 HERE = Path(__file__).parent
-SCENE = HERE.parent / "data" / "scenes" / "hanging.toml"
+SCENES = HERE.parent / "data" / "scenes"
 
 IMPORT = "import time; t = time.perf_counter(); import pvcloth; print(time.perf_counter() - t)"
-FIRST_FRAME = (
-    "import time; t = time.perf_counter(); import pvcloth; "
-    f"sim = pvcloth.Simulation.from_file({str(SCENE)!r}); sim.advance(1 / 30); "
-    "print(time.perf_counter() - t)"
-)
+
+
+def first_frame(scene: str) -> str:
+    """Code that builds ``scene`` and simulates 1/30 s, printing the seconds
+    from before the import."""
+    return (
+        "import time; t = time.perf_counter(); import pvcloth; "
+        f"sim = pvcloth.Simulation.from_file({str(SCENES / scene)!r}); sim.advance(1 / 30); "
+        "print(time.perf_counter() - t)"
+    )
 
 
 def seconds(code: str, env: dict) -> float:
@@ -40,6 +46,18 @@ def seconds(code: str, env: dict) -> float:
 REPEATS = 1 if SMOKE else 5
 
 
+def cold_and_warm(code: str, env: dict) -> tuple[float, float]:
+    """Medians (s) of ``code`` run with an empty numba cache (it compiles)
+    and again with the cache that run left."""
+    cold, warm = [], []
+    for _ in range(REPEATS):
+        with tempfile.TemporaryDirectory() as cache:
+            env = dict(env, NUMBA_CACHE_DIR=cache)
+            cold.append(seconds(code, env))
+            warm.append(seconds(code, env))
+    return float(np.median(cold)), float(np.median(warm))
+
+
 def main() -> None:
     rows = []
     for backend in ("numba", "numpy"):
@@ -47,22 +65,18 @@ def main() -> None:
         rows.append(
             (backend, "import pvcloth", np.median([seconds(IMPORT, env) for _ in range(REPEATS)]))
         )
-        cold, warm = [], []
-        for _ in range(REPEATS if backend == "numba" else 0):
-            with tempfile.TemporaryDirectory() as cache:
-                env["NUMBA_CACHE_DIR"] = cache
-                cold.append(seconds(FIRST_FRAME, env))
-                warm.append(seconds(FIRST_FRAME, env))
         if backend == "numba":
-            rows.append((backend, "import + first frame, cold cache (compiles)", np.median(cold)))
-            rows.append((backend, "import + first frame, warm cache", np.median(warm)))
+            for scene, what in (("hanging.toml", ""), ("fold.toml", ", fold.toml")):
+                cold, warm = cold_and_warm(first_frame(scene), env)
+                rows.append((backend, f"import + first frame{what}, cold cache (compiles)", cold))
+                rows.append((backend, f"import + first frame{what}, warm cache", warm))
         else:
-            env.pop("NUMBA_CACHE_DIR", None)
+            code = first_frame("hanging.toml")
             rows.append(
                 (
                     backend,
                     "import + first frame",
-                    np.median([seconds(FIRST_FRAME, env) for _ in range(REPEATS)]),
+                    np.median([seconds(code, env) for _ in range(REPEATS)]),
                 )
             )
     lines = [
@@ -70,7 +84,8 @@ def main() -> None:
         "",
         "`python benchmarks/startup.py`: fresh processes, median of 5, seconds. The first "
         "frame is building the hanging scene (32x32, its stable-step check included) and "
-        "simulating 1/30 s.",
+        "simulating 1/30 s; with fold.toml, the same for the long cloth over the bar "
+        "(32x32, self-collision on: its kernels compile on the first step).",
         "",
         "| backend | what | seconds |",
         "|---|---|---|",

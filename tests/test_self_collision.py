@@ -290,6 +290,34 @@ def test_a_kept_wider_pair_list_changes_nothing(monkeypatch):
     assert np.array_equal(fresh, kept)
 
 
+@pytest.mark.parametrize("kind", [0, 1], ids=["point-triangle", "edge-edge"])
+def test_the_hash_grid_lists_exactly_the_overlapping_boxes(kind):
+    # Against every pair compared with every other (O(N^2), fine for 8x8):
+    # the same pairs, each once, none sharing a point. Boxes of random
+    # sizes, some spanning many cells, on a crumpled grid.
+    shape = (8, 8)
+    x = RNG.normal(scale=0.05, size=(64, 3))
+    size = RNG.uniform(0.0, 0.03, size=(64, 1)) * (1 + 9 * (RNG.random((64, 1)) < 0.1))
+    lo, hi = x - size, x + size
+    items = self_collision.grid_triangles(shape) if kind == 0 else self_collision.grid_edges(shape)
+    ilo = lo[items].min(axis=1)
+    ihi = hi[items].max(axis=1)
+    qlo, qhi = (lo, hi) if kind == 0 else (ilo, ihi)
+    overlap = np.all((qlo[:, None] <= ihi[None]) & (qhi[:, None] >= ilo[None]), axis=2)
+    queries = np.arange(len(qlo))[:, None, None] if kind == 0 else items[:, None, :]
+    shares = (queries[..., None] == items[None, :, None, :]).any(axis=(2, 3))
+    if kind == 1:
+        overlap &= np.triu(np.ones_like(overlap), 1)  # each pair once
+    expected = {tuple(p) for p in np.argwhere(overlap & ~shares)}
+    out = np.empty((len(qlo) * len(ilo), 2), np.int64)  # room for every pair
+    for cell in (0.004, 0.02, 0.5):  # boxes spanning many cells, a few, or one
+        n = self_collision.box_pairs(qlo, qhi, ilo, ihi, items, kind, cell, out)
+        found = [tuple(p) for p in out[:n]]
+        assert len(found) == len(set(found))  # each once
+        assert set(found) == expected
+    assert len(expected) > 50
+
+
 # -- more scenes that fold onto themselves (tests/contact_scenes.py) ----------------
 
 
