@@ -75,15 +75,15 @@ def timed(on: Simulation, off: Simulation, frames: int) -> tuple[float, float, i
     falls on both; within a turn the caches hold one simulation, as in a
     real run: turns of one frame made both slower, on the more), and the
     candidate pairs of the last step on."""
-    times: dict[int, list[float]] = {id(on): [], id(off): []}
+    times: tuple[list[float], list[float]] = ([], [])
     for first in range(0, frames, BLOCK):
-        for sim in (on, off):
+        for sim, kept in zip((on, off), times, strict=True):
             for _ in range(min(BLOCK, frames - first)):
                 start = time.perf_counter()
                 sim.advance(FRAME)
-                times[id(sim)].append(time.perf_counter() - start)
+                kept.append(time.perf_counter() - start)
     candidates = on.model.self_collision.report.candidates
-    return float(np.median(times[id(on)])), float(np.median(times[id(off)])), candidates
+    return float(np.median(times[0])), float(np.median(times[1])), candidates
 
 
 def main() -> None:
@@ -119,7 +119,7 @@ def main() -> None:
         f"--windy {args.windy:g}`; median ms "
         "per 1/60 s frame of `fast_mass_spring` (one 1/60 s step off; on, the steps the "
         "self-collision step bound asks for), on and off measured side by side from the "
-        "same state, in turns of five frames each.",
+        f"same state, in turns of {BLOCK} frames each.",
         "",
         "| points per side | scene | off (ms) | on (ms) | on / off | steps per frame on "
         "| candidate pairs |",
