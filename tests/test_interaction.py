@@ -19,6 +19,7 @@ from conftest import SCENES
 from pvcloth import Simulation
 
 pytestmark = [
+    pytest.mark.serial,  # real-time clocks and a real window: a busy neighbour breaks them
     pytest.mark.usefixtures("rendering"),
     pytest.mark.filterwarnings("error"),
 ]  # callback errors surface as warnings

@@ -71,6 +71,14 @@ def test_the_readme_shows_commands_and_python():
     assert len(RUNNABLE) >= 5 and fenced_blocks(README, "python")
 
 
+def test_ci_runs_the_readme_test_command_as_written():
+    """CI (``.ci/run``) runs exactly what the README tells a developer to."""
+    (block,) = [b for b in fenced_blocks(README, "bash") if "'.[test]'" in b]
+    command = block.strip().split("pip install -e '.[test]' && ")[1]
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8").splitlines()
+    assert command in ci
+
+
 def test_every_subcommand_is_documented_and_every_documented_one_exists():
     named = {_subcommand(c) for c in COMMANDS if not c.split()[1].startswith("-")}
     assert named == subcommands()

@@ -109,6 +109,7 @@ def _cloth_pixels(path: Path) -> np.ndarray:
     return front | back
 
 
+@pytest.mark.serial  # a drag at a person's pace, checked in the picture
 def test_the_window_opens_takes_keys_and_a_drag_and_quits(workdir, x_display):
     env = {k: v for k, v in os.environ.items() if k != "VTK_DEFAULT_OPENGL_WINDOW"}
     env["DISPLAY"] = x_display

@@ -76,6 +76,13 @@ class ImplicitEuler(Integrator):
         mass = np.repeat(model.mass, 3)
         system = (sp.diags(mass) - dt * dfdv - dt * dt * dfdx).tocsr()[free][:, free]
         rhs = dt * (f + dt * (dfdx @ v.ravel()))[free]
+        if not (np.all(np.isfinite(system.data)) and np.all(np.isfinite(rhs))):
+            # A non-finite state gives a non-finite system: no solver can
+            # answer it (scipy's direct solve only warns "exactly singular").
+            raise DivergenceError(
+                f"implicit Euler: the forces or their derivatives are not finite at "
+                f"t = {state.t:.6g} s (dt = {dt:.3g} s); the state diverged, try a smaller dt"
+            )
         guess = (
             self._last_dv if self._last_dv is not None and self._last_dv.size == rhs.size else None
         )
