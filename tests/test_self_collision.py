@@ -399,8 +399,8 @@ def test_a_cloth_piled_dragged_twisted_or_folded_onto_itself_never_intersects(na
 #: not at 64x64 (a minute a step or more).
 EXPLICIT_STEPS = 150
 # Fragile, and known: in the twist at 64x64, explicit Euler's step
-# (0.000124 s) is within 1% of the stable step of the most twisted state
-# (0.000123 s). It passes on the threaded kernels a 2-core run uses, and
+# (0.000124 s) is within 1% of the springs' stable step where it diverged
+# (0.000123 s, at 0.92 s). It passes on the threaded kernels a 2-core run uses, and
 # diverged at its 150th step on the serial ones (one numba thread, as under
 # pytest-xdist), whose sums round differently (seen 2026-12-03).
 IMPLICIT_SECONDS = {"implicit_euler": 0.3, "backward_euler": 0.1}
