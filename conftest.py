@@ -5,6 +5,10 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+# One numba cache for the whole run: pytest-xdist's processes and every
+# subprocess a test starts (they inherit the environment) load the kernels
+# the first one compiled instead of compiling them again.
+os.environ.setdefault("NUMBA_CACHE_DIR", str(Path(__file__).resolve().parent / ".cache" / "numba"))
 if os.environ.get("PYTEST_XDIST_WORKER"):
     # Several test processes share the cores: threads inside each would only
     # fight (numba reads this when first imported, below).
@@ -109,3 +113,81 @@ def _docstring_examples_in_a_fresh_folder(request, monkeypatch):
         import pyvista
 
         monkeypatch.setattr(pyvista, "OFF_SCREEN", True)
+
+
+# -- tiers ----------------------------------------------------------------------
+#
+# A test is quick unless marked ``validation``, ``serial`` or ``exhaustive``
+# (pyproject.toml declares them; the README's development section says which
+# command runs which). Quick tests get pytest-timeout's limit from
+# pyproject.toml; the marked tiers get theirs here, unless a test sets its own.
+
+#: Per-test time limit (s) of each marked tier; 0 is none.
+TIME_LIMITS = {"exhaustive": 0, "validation": 900, "serial": 300}
+#: Where an exhaustive run records itself, with the commit it ran on.
+EXHAUSTIVE_RECORD = ROOT / "benchmarks" / "results" / "exhaustive.md"
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if item.get_closest_marker("timeout") is not None:
+            continue
+        for tier, limit in TIME_LIMITS.items():
+            if item.get_closest_marker(tier) is not None:
+                item.add_marker(pytest.mark.timeout(limit))
+                break
+
+
+def pytest_sessionstart(session):
+    import time
+
+    session.config._pvcloth_started = time.time()
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config):
+    """After ``python -m pytest -m exhaustive`` (and only then), record the
+    run in ``benchmarks/results/exhaustive.md``: commit, machine, outcome
+    counts, wall time and the slowest tests."""
+    if (config.option.markexpr or "").strip() != "exhaustive" or hasattr(config, "workerinput"):
+        return
+    import platform
+    import subprocess
+    import time
+
+    def git(*args: str) -> str:
+        done = subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True)
+        return done.stdout.strip() if done.returncode == 0 else ""
+
+    commit = git("rev-parse", "HEAD") or "unknown"
+    if git("status", "--porcelain", "--untracked-files=no"):
+        commit += " with uncommitted changes"
+    stats = terminalreporter.stats
+    counts = {k: len(stats.get(k, [])) for k in ("passed", "failed", "error", "xfailed", "skipped")}
+    seconds = time.time() - config._pvcloth_started
+    reports = [r for r in stats.get("passed", []) + stats.get("failed", []) if r.when == "call"]
+    slowest = sorted(reports, key=lambda r: r.duration, reverse=True)[:15]
+    failed = [r.nodeid for r in stats.get("failed", []) + stats.get("error", [])]
+    lines = [
+        "# The exhaustive tier's last run",
+        "",
+        f"`python -m pytest {' '.join(config.invocation_params.args)}` on commit {commit}, "
+        f"{time.strftime('%Y-%m-%d', time.gmtime())}, {platform.system()} "
+        f"{platform.machine()} with {os.cpu_count()} cores, Python {platform.python_version()}: "
+        f"{seconds / 60:.1f} minutes, exit status {int(exitstatus)}.",
+        "",
+        "| outcome | tests |",
+        "|---|---|",
+        *(f"| {k} | {v} |" for k, v in counts.items()),
+        "",
+        "Failed: " + (", ".join(f"`{n}`" for n in failed) if failed else "none."),
+        "",
+        "Slowest:",
+        "",
+        "| seconds | test |",
+        "|---|---|",
+        *(f"| {r.duration:.0f} | `{r.nodeid}` |" for r in slowest),
+    ]
+    partial = EXHAUSTIVE_RECORD.with_suffix(".md.partial")
+    partial.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    partial.replace(EXHAUSTIVE_RECORD)  # a killed run leaves the last record whole
+    terminalreporter.write_line(f"recorded in {EXHAUSTIVE_RECORD.relative_to(ROOT)}")

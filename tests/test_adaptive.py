@@ -323,7 +323,7 @@ def test_a_tolerance_out_of_reach_stops_with_what_to_change():
     assert np.isfinite(sim.positions).all() and sim.time < 0.1
 
 
-@pytest.mark.slow
+@pytest.mark.validation
 @pytest.mark.parametrize(
     "stiffness, mass", [(100.0, 0.2), (2000.0, 0.1)], ids=["soft", "stiff and light"]
 )

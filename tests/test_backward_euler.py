@@ -198,7 +198,7 @@ def test_the_step_potential_has_the_residual_as_gradient_and_newton_as_hessian()
     assert abs(potential.matrix(t, exact=False, pinned=pinned) - exact).max() > 0
 
 
-@pytest.mark.slow
+@pytest.mark.validation
 def test_it_converges_at_steps_too_small_for_the_potential_to_resolve():
     """At a 7.5e-5 s step the last Newton iterations change the potential by
     about 1e-17 J, below its rounding: a search on the potential alone

@@ -78,8 +78,15 @@ def copy(tmp_path_factory):
     return target
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("script", sorted(RUNS))
+#: The benchmark the quick tier runs (the others are validation): it goes
+#: through the same smoke-size switch and results-file writing as the rest.
+QUICK_TWIN = "step_allocations.py"
+
+
+@pytest.mark.parametrize(
+    "script",
+    [s if s == QUICK_TWIN else pytest.param(s, marks=pytest.mark.validation) for s in sorted(RUNS)],
+)
 def test_the_benchmark_runs_to_the_end(copy, script):
     arguments, result = RUNS[script]
     command = [sys.executable, str(copy / "benchmarks" / script), *arguments]

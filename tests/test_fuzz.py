@@ -317,3 +317,28 @@ def test_tampered_checkpoint_entries_raise_checkpoint_error(tmp_path, checkpoint
     path = tmp_path / "tampered.npz"
     np.savez(path, **entries)
     _load_and_run(path)
+
+
+#: Cases per fuzz test in the exhaustive tier: about 10,000 in all.
+EXHAUSTIVE_EXAMPLES = 2500
+
+
+@pytest.mark.exhaustive
+def test_every_fuzz_test_at_thousands_of_cases():
+    # The four tests above with EXHAUSTIVE_EXAMPLES cases each (they run
+    # 150 in the quick tier), in a process of their own so the count is
+    # read when this module is imported.
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    done = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-m", "not exhaustive",
+         "-p", "no:randomly", "--timeout=0", __file__],
+        cwd=Path(__file__).resolve().parent.parent,
+        env=dict(os.environ, PVCLOTH_FUZZ_EXAMPLES=str(EXHAUSTIVE_EXAMPLES)),
+        capture_output=True,
+        text=True,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout[-4000:] + done.stderr[-2000:]
+    assert "4 passed" in done.stdout

@@ -98,7 +98,6 @@ print(best, np.abs(sim.state.x - threaded).max(), kernels.threading_layer())
 """
 
 
-@pytest.mark.slow
 @pytest.mark.serial  # cpu over wall time: another test on the second core would halve it
 @pytest.mark.parametrize("first", [8, 96])
 def test_a_big_step_runs_threaded_whatever_cloth_filled_the_cache_first(tmp_path, first):
@@ -199,7 +198,6 @@ print(kernels.threading_layer(), np.median(times[2:12]), np.median(times[40:]),
 """
 
 
-@pytest.mark.slow
 @pytest.mark.serial  # frame times early and late: a neighbour's burst would fall on one
 @pytest.mark.parametrize("layer", ["omp", "tbb", "workqueue"])
 def test_frames_do_not_slow_down_or_grow_memory_on_any_threading_layer(layer):

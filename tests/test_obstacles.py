@@ -223,8 +223,11 @@ def test_bad_obstacles_are_named(obstacle, key, words):
     assert words in str(caught.value)
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("name", ["drape_sphere", "drape_cube", "ground"])
+@pytest.mark.parametrize(  # the ground in the quick tier, the drapes in validation
+    "name",
+    [pytest.param(n, marks=pytest.mark.validation) for n in ("drape_sphere", "drape_cube")]
+    + ["ground"],
+)
 def test_bundled_obstacle_scenes_settle_outside_their_obstacles(name):
     sim = Simulation.from_file(SCENES / f"{name}.toml")
     for _ in range(15):

@@ -102,7 +102,10 @@ def test_version_comes_from_the_package_metadata():
 @pytest.mark.usefixtures("rendering")
 @pytest.mark.parametrize(
     "command",
-    [pytest.param(c, marks=pytest.mark.slow) if _subcommand(c) in SLOW else c for c in RUNNABLE],
+    [
+        pytest.param(c, marks=pytest.mark.validation) if _subcommand(c) in SLOW else c
+        for c in RUNNABLE
+    ],
 )
 def test_readme_command_runs_as_written(command, user_folder):
     result = subprocess.run(

@@ -6,7 +6,6 @@ a scene without the table runs none of it."""
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
@@ -94,7 +93,7 @@ def test_the_fold_never_intersects_with_self_collision():
     assert sim.model.self_collision.report.contacts > 0  # the halves did meet
 
 
-@pytest.mark.slow
+@pytest.mark.validation
 @pytest.mark.parametrize("integrator", ["symplectic_euler", "verlet", "implicit_euler"])
 def test_the_fold_never_intersects_with_other_integrators(integrator):
     # From the folded cloth (halves in contact), each integrator at its own
@@ -319,44 +318,22 @@ def test_the_hash_grid_lists_exactly_the_overlapping_boxes(kind):
 
 
 # -- more scenes that fold onto themselves (tests/contact_scenes.py) ----------------
+#
+# In three tiers, each asserting the same things at its own size: every
+# scene played by fast_mass_spring never intersects (and does pass through
+# itself with nothing to stop it), and every other integrator, taking over
+# at the moment a scene's layers press hardest, keeps it so.
+# - quick: every scene at QUICK_N points a side, each integrator from one
+#   scene (PAIRED);
+# - validation: the same pairs at 64x64 (backward Euler at 32x32);
+# - exhaustive: every scene with every integrator at 32x32 and 64x64.
 
-
-def _first_intersection(sim, drive, seconds: float, stop_at_first: bool, keep_at=None):
-    """``(worst count, pairs the report calls unresolved, kept)`` over the
-    run, counted after every step; ``kept`` is ``(x, v, t)`` at the first
-    step ending at or after ``keep_at`` seconds (None if not asked)."""
-    worst = unresolved = 0
-    kept = None
-    while sim.state.t < seconds - 1e-9:
-        if drive is not None:
-            drive(sim)
-        sim.advance(sim.dt)
-        worst = max(worst, count_self_intersections(sim.state.x, sim.resolution))
-        if sim.model.self_collision is not None:
-            unresolved += sim.model.self_collision.report.unresolved
-        if keep_at is not None and kept is None and sim.state.t >= keep_at - 1e-9:
-            kept = (sim.state.x.copy(), sim.state.v.copy(), sim.state.t)
-        if worst and stop_at_first:
-            break
-    return worst, unresolved, kept
-
-
-#: ``(scene, seconds, points per side)``. The drape at 64x64 is left out: its
-#: finer skirt folds without passing through itself even with nothing to stop
-#: it (none in 2 s), so it would prove nothing.
-FOLDING = [
-    (name, seconds, n)
-    for n in (32, 64)
-    for name, seconds in [
-        ("crumple", 1.5),
-        ("corner drag", 1.0),
-        ("twist", 1.5),
-        ("towel fold", 2.0),
-        ("sphere drape", 2.0),
-    ]
-    if (name, n) != ("sphere drape", 64)
-]
-
+#: Points a side of the quick tier's scenes: each of the five passes
+#: through itself at this size when nothing stops it (240 to 1,300
+#: intersecting pairs at 24x24, 86 to 325 at 16x16).
+QUICK_N = 24
+#: How long each scene is played (s).
+SECONDS = {"crumple": 1.5, "corner drag": 1.0, "twist": 1.5, "towel fold": 2.0, "sphere drape": 2.0}
 #: When each scene's layers press hardest on each other (s): the contacts
 #: of a fast_mass_spring run at 32x32, summed over each 0.1 s, peak there
 #: (crumple 21,000 at 0.6 s; the dragged corner lands at 0.7 s; twist
@@ -368,41 +345,26 @@ PRESSING = {
     "towel fold": 0.9,
     "sphere drape": 0.7,
 }
-
-
-@functools.cache
-def _played(name: str, seconds: float, n: int):
-    """The scene with self-collision, played by ``fast_mass_spring`` for
-    ``seconds``: :func:`_first_intersection`'s answer, keeping the state at
-    ``PRESSING[name]``."""
-    from contact_scenes import ALL
-
-    sim, drive = ALL[name](n, "fast_mass_spring", True)
-    return _first_intersection(sim, drive, seconds, False, keep_at=PRESSING[name])
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("name, seconds, n", FOLDING)
-def test_a_cloth_piled_dragged_twisted_or_folded_onto_itself_never_intersects(name, seconds, n):
-    from contact_scenes import ALL
-
-    without, _, _ = _first_intersection(*ALL[name](n, "fast_mass_spring", False), seconds, True)
-    assert without > 0  # the scene does pass through itself when nothing stops it
-    worst, unresolved, _ = _played(name, seconds, n)
-    assert (worst, unresolved) == (0, 0)
-
-
-#: Steps each explicit integrator takes from the pressed state (its usual
-#: step is 35 to 650 times shorter than fast_mass_spring's); implicit ones
-#: run this long (s): backward Euler, the reference solved to convergence,
-#: takes up to 13 s a step in these scenes at 32x32, so it runs 0.1 s, and
-#: not at 64x64 (a minute a step or more).
+#: The scene each integrator takes over in the quick and validation tiers:
+#: every scene once at least. backward_euler's Newton iterations stall on
+#: the crushed piles of the crumple and the drag (see NEWTON_STALLS), so it
+#: takes the towel.
+PAIRED = {
+    "explicit_euler": "twist",
+    "symplectic_euler": "crumple",
+    "verlet": "corner drag",
+    "rk4": "sphere drape",
+    "rk23": "towel fold",
+    "implicit_euler": "crumple",
+    "backward_euler": "towel fold",
+}
+#: Steps each explicit integrator takes from the pressed state (its step is
+#: 35 to 650 times shorter than fast_mass_spring's, chosen anew at that
+#: state, so it keeps half the stable step there); implicit ones run this
+#: long (s): backward Euler, the reference solved to convergence, takes up
+#: to 13 s a step in these scenes at 32x32, so it runs 0.1 s, and not at
+#: 64x64 (a minute a step or more).
 EXPLICIT_STEPS = 150
-# Fragile, and known: in the twist at 64x64, explicit Euler's step
-# (0.000124 s) is within 1% of the springs' stable step where it diverged
-# (0.000123 s, at 0.92 s). It passes on the threaded kernels a 2-core run uses, and
-# diverged at its 150th step on the serial ones (one numba thread, as under
-# pytest-xdist), whose sums round differently (seen 2026-12-03).
 IMPLICIT_SECONDS = {"implicit_euler": 0.3, "backward_euler": 0.1}
 #: backward_euler's Newton iterations stall here at its 1/60 s step, 0.007
 #: m/s^2 short of its 0.001 m/s^2 tolerance after 200 iterations (the
@@ -413,37 +375,125 @@ NEWTON_STALLS = pytest.mark.xfail(
 )
 
 
-def _every_integrator():
-    for name, seconds, n in FOLDING:
-        for integrator in sorted(INTEGRATORS):
-            if integrator == "fast_mass_spring":  # it plays the whole scene above
-                continue
-            if integrator == "backward_euler" and n > 32:
-                continue
-            stalls = integrator == "backward_euler" and name in ("crumple", "corner drag")
-            yield pytest.param(
-                name, seconds, n, integrator,
-                id=f"{name}-{n}-{integrator}", marks=[NEWTON_STALLS] if stalls else [],
-            )  # fmt: skip
+def _first_intersection(sim, drive, seconds: float, stop_at_first: bool):
+    """``(worst count, pairs the report calls unresolved)`` over the run,
+    counted after every step."""
+    worst = unresolved = 0
+    while sim.state.t < seconds - 1e-9:
+        if drive is not None:
+            drive(sim)
+        sim.advance(sim.dt)
+        worst = max(worst, count_self_intersections(sim.state.x, sim.resolution))
+        if sim.model.self_collision is not None:
+            unresolved += sim.model.self_collision.report.unresolved
+        if worst and stop_at_first:
+            break
+    return worst, unresolved
 
 
-EVERY_INTEGRATOR = list(_every_integrator())
+def _played(n: int, mark=None):
+    """Every scene at ``n`` points a side (the drape not at 64x64: its finer
+    skirt folds without passing through itself even with nothing to stop it,
+    none in 2 s, so it would prove nothing)."""
+    return [
+        pytest.param(name, n, id=f"{name}-{n}", marks=[mark] if mark else [])
+        for name in SECONDS
+        if (name, n) != ("sphere drape", 64)
+    ]
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("name, seconds, n, integrator", EVERY_INTEGRATOR)
-def test_every_integrator_keeps_each_scene_from_passing_through_itself(
-    name, seconds, n, integrator
-):
-    # Each integrator at its own step (the automatic one, split for contact)
-    # from the moment the scene's layers press hardest, as fast_mass_spring
-    # brought it there; pins keep being driven; counted after every step.
+@pytest.mark.parametrize(
+    "name, n",
+    _played(QUICK_N) + _played(64, pytest.mark.validation) + _played(32, pytest.mark.exhaustive),
+)
+def test_a_cloth_piled_dragged_twisted_or_folded_onto_itself_never_intersects(name, n):
     from contact_scenes import ALL
 
-    _, _, (x, v, t) = _played(name, seconds, n)
-    sim, drive = ALL[name](n, integrator, True)
+    without, _ = _first_intersection(*ALL[name](n, "fast_mass_spring", False), SECONDS[name], True)
+    assert without > 0  # the scene does pass through itself when nothing stops it
+    sim, drive = ALL[name](n, "fast_mass_spring", True)
+    assert _first_intersection(sim, drive, SECONDS[name], False) == (0, 0)
+
+
+@pytest.fixture(scope="session")
+def pressed_state(tmp_path_factory, worker_id):
+    """``pressed_state(name, n) -> (x, v, t)``: the scene with self-collision,
+    played by fast_mass_spring to ``PRESSING[name]``. Built once per run
+    and kept in a file of the run's temporary folder, which pytest-xdist's
+    processes share (a lock lets one of them build it)."""
+    import fcntl
+
+    from contact_scenes import ALL
+
+    folder = tmp_path_factory.getbasetemp()
+    if worker_id != "master":  # each xdist process has a folder of its own in the run's
+        folder = folder.parent
+    folder = folder / "pressed-states"
+    folder.mkdir(exist_ok=True)
+
+    def pressed(name: str, n: int):
+        path = folder / f"{name.replace(' ', '-')}-{n}.npz"
+        with open(path.with_suffix(".lock"), "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if not path.exists():
+                sim, drive = ALL[name](n, "fast_mass_spring", True)
+                while sim.state.t < PRESSING[name] - 1e-9:
+                    if drive is not None:
+                        drive(sim)
+                    sim.advance(sim.dt)
+                np.savez(path, x=sim.state.x, v=sim.state.v, t=sim.state.t)
+        with np.load(path) as kept:
+            return kept["x"], kept["v"], float(kept["t"])
+
+    return pressed
+
+
+def _integrators():
+    """The quick and validation pairs, then the exhaustive product."""
+    for integrator, name in sorted(PAIRED.items()):
+        sizes = [(QUICK_N, None), (32 if integrator == "backward_euler" else 64, "validation")]
+        for n, tier in sizes:
+            yield pytest.param(
+                name, n, integrator, id=f"{name}-{n}-{integrator}",
+                marks=[getattr(pytest.mark, tier)] if tier else [],
+            )  # fmt: skip
+    for n in (32, 64):
+        for name in SECONDS:
+            for integrator in sorted(INTEGRATORS):
+                if integrator == "fast_mass_spring":  # it plays each whole scene above
+                    continue
+                if (integrator == "backward_euler" and n > 32) or (name, n) == ("sphere drape", 64):
+                    continue
+                if PAIRED[integrator] == name and (n == 64 or integrator == "backward_euler"):
+                    continue  # a validation pair already
+                marks = [pytest.mark.exhaustive]
+                if integrator == "backward_euler" and name in ("crumple", "corner drag"):
+                    marks.append(NEWTON_STALLS)
+                yield pytest.param(
+                    name, n, integrator, id=f"{name}-{n}-{integrator}", marks=marks
+                )  # fmt: skip
+
+
+@pytest.mark.parametrize("name, n, integrator", list(_integrators()))
+def test_every_integrator_keeps_each_scene_from_passing_through_itself(
+    name, n, integrator, pressed_state
+):
+    # Each integrator takes over from the moment the scene's layers press
+    # hardest, as fast_mass_spring brought it there, at its own automatic
+    # step chosen anew at that state (half the stable step there, split for
+    # contact), as a user switching integrators at that moment gets it; pins
+    # keep being driven; counted after every step.
+    from contact_scenes import ALL
+
+    x, v, t = pressed_state(name, n)
+    sim, drive = ALL[name](n, "fast_mass_spring", True)
     sim.state.x[:], sim.state.v[:], sim.state.t = x, v, t
+    if drive is not None:
+        drive(sim)
     assert count_self_intersections(sim.state.x, sim.resolution) == 0
+    sim.update({"solver.integrator": integrator, "solver.dt": None})
+    if integrator not in IMPLICIT_SECONDS:  # the step keeps its margin at this state
+        assert sim.dt <= 0.5 * sim.stable_dt() * (1 + 1e-12)
     implicit = integrator in IMPLICIT_SECONDS
     end = t + IMPLICIT_SECONDS[integrator] if implicit else math.inf
     worst = contacts = steps = 0
@@ -501,7 +551,7 @@ def test_a_step_that_would_list_too_many_pairs_is_refused_with_a_clear_error(mon
         contact.resolve(x0, x1, (x1 - x0) / 0.01, np.ones(64), 0.01)
 
 
-@pytest.mark.parametrize("n", [32, pytest.param(64, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("n", [32, pytest.param(64, marks=pytest.mark.validation)])
 def test_a_folded_towel_at_rest_does_not_chatter(n):
     # The towel of examples/fold_a_towel.py, let go at 1 s, over its third
     # second. Layers that chatter gain about one step of gravity every step:

@@ -70,17 +70,17 @@ def test_bad_wind_values(data, key):
     assert caught.value.key == key
 
 
-@pytest.mark.slow
-def test_flag_flutters_and_stays_finite_for_a_long_run():
+@pytest.mark.parametrize("seconds", [1.5, pytest.param(4.0, marks=pytest.mark.validation)])
+def test_flag_flutters_and_stays_finite_for_a_long_run(seconds):
     sim = Simulation.from_file(SCENES / "flag.toml")
     tips = []
-    for _ in range(40):
+    for _ in range(round(seconds / 0.1)):
         sim.advance(0.1)
         tips.append(sim.positions[-1].copy())  # the top corner of the fly end
     tips = np.array(tips)
     assert np.isfinite(sim.positions).all()
     assert sim.positions[:, 0].mean() > 0.4  # blown out from the pole, not hanging
-    assert tips[20:, 1].std() > 1e-3  # still moving: fluttering, not frozen
+    assert tips[len(tips) // 2 :, 1].std() > 1e-3  # still moving: fluttering, not frozen
 
 
 @pytest.mark.parametrize("integrator", ["symplectic_euler", "implicit_euler"])

@@ -272,7 +272,11 @@ def _client(scheduler: str | None, workers: int | None):
             threads_per_worker=1,
             processes=True,
             dashboard_address=None,
-            silence_logs=logging.ERROR,  # workers' warnings (a cancelled task) are no news
+            # A task's error reaches this process through its future; what
+            # the workers log besides is news of their own shutdown (a
+            # cancelled task, a heartbeat to a scheduler already closed by
+            # Ctrl-C), printed with a traceback at ERROR level.
+            silence_logs=logging.CRITICAL,
         )
     finally:
         signal.signal(signal.SIGINT, previous)
