@@ -42,12 +42,21 @@ class SceneError(InputError):
         Dotted path of the offending key, e.g. ``"cloth.resolution"``.
     message : str
         What is wrong and what is allowed.
+    where : str, optional
+        The file (and line) the key was read from, put in front of the
+        message, e.g. ``"scene.toml, line 3"``.
     """
+
+    def __init__(self, key: str, message: str, where: str = ""):
+        super().__init__(key, message)
+        self.where = where
+        if where:
+            self.args = (f"{where}: {self.args[0]}",)
 
     def under(self, prefix: str) -> SceneError:
         """Return the same error with ``prefix`` put in front of its key."""
         key = f"{prefix}.{self.key}" if self.key else prefix
-        return SceneError(key, self.message)
+        return SceneError(key, self.message, self.where)
 
 
 class DivergenceError(PvclothError, FloatingPointError):

@@ -44,6 +44,21 @@ def describe(sim: Simulation) -> str:
         "obstacles   "
         + ("; ".join(o.describe() for o in model.obstacles) or "none (no collision code runs)")
     )
+    contact = sim.contact_step()  # infinite without self-collision
+    layers = model.self_collision
+    if layers is None:
+        lines.append("contact     no self-collision (add a [self_collision] table to turn it on)")
+    else:
+        held = (
+            f"steps are split to at most {contact:.3g} s (one step's fall under gravity "
+            f"within what the contact response may move a point)"
+            if math.isfinite(contact)
+            else "no limit on the step without gravity"
+        )
+        lines.append(
+            f"contact     self-collision on: layers kept {1e3 * layers.thickness:.3g} mm apart, "
+            f"friction {layers.friction:g}; {held}"
+        )
     pinned = np.flatnonzero(sim.control.pinned)
     shown = ", ".join(f"({k % nx}, {k // nx})" for k in pinned[:6])
     more = f" and {pinned.size - 6} more" if pinned.size > 6 else ""
@@ -57,7 +72,6 @@ def describe(sim: Simulation) -> str:
         )
     )
     stable = sim.stable_dt()
-    contact = sim.contact_step()  # infinite without self-collision
     if sim.dt_source == "auto":
         if contact < min(FRAME_DT, SAFE_SHARE * stable):
             origin = "automatic: under the self-collision step, dividing 1/60 s"
@@ -76,11 +90,6 @@ def describe(sim: Simulation) -> str:
         )
     else:
         origin = "as given"
-    if contact < FRAME_DT:
-        origin += (
-            f"; self-collision holds a layer up on another only in steps under {contact:.3g} s "
-            f"(one step's fall under gravity within what its response may move a point)"
-        )
     lines.append(
         f"integrator  {sim.integrator.name} (order {sim.integrator.order}: "
         f"{sim.integrator.description}), dt = {sim.dt:.4g} s ({origin})"

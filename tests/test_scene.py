@@ -138,6 +138,44 @@ def test_file_errors_are_scene_errors(tmp_path):
         pvcloth.load_scene(broken)
 
 
+@pytest.mark.parametrize("text", ["", "\n# only a comment\n"], ids=["empty", "comment"])
+def test_a_scene_file_that_sets_nothing_is_refused(tmp_path, text):
+    path = tmp_path / "blank.toml"
+    path.write_text(text)
+    with pytest.raises(SceneError, match=r"blank\.toml sets nothing: .*cloth\.resolution"):
+        pvcloth.load_scene(path)
+
+
+@pytest.mark.parametrize(
+    "text, key, line",
+    [
+        ("cloth.resolutoin = [8, 8]\n", "cloth.resolutoin", 1),
+        ('name = "x"\n\n[cloth]\nmass = 0.3\nresolution = -3\n', "cloth.resolution", 5),
+        ("[solver]\ndt = 0.01\n[cloth]\ndt = 1\n", "cloth.dt", 4),
+        ("solver = { dt = -1 }\n", "solver.dt", 1),
+        (
+            '[[obstacles]]\ntype = "sphere"\nradius = 1\ncentre = [0, 0, 0]\n',
+            "obstacles[0].centre",
+            4,
+        ),
+        (  # two obstacles set a radius: the line is ambiguous, the file is named
+            '[[obstacles]]\ntype = "sphere"\nradius = 1\n[[obstacles]]\ntype = "sphere"\n'
+            "radius = -1\n",
+            "obstacles[1].radius",
+            None,
+        ),
+    ],
+)
+def test_a_scene_file_error_names_the_file_and_line(tmp_path, text, key, line):
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    with pytest.raises(SceneError) as caught:
+        pvcloth.load_scene(path)
+    assert caught.value.key == key
+    where = f"{path}, line {line}" if line else f"{path}"
+    assert str(caught.value).startswith(f"{where}: {key}: "), str(caught.value)
+
+
 # -- property-based: malformed dictionaries raise SceneError and nothing else --
 
 KEYS = [

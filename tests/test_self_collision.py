@@ -15,6 +15,7 @@ from intersections import count_self_intersections
 from conftest import ROOT
 from pvcloth import Scene, SceneError, SelfCollisionSpec, Simulation, load_scene
 from pvcloth.errors import DivergenceError
+from pvcloth.info import describe
 from pvcloth.physics import self_collision
 from pvcloth.physics.integrators import INTEGRATORS
 
@@ -116,6 +117,7 @@ def test_without_the_table_no_self_collision_code_runs(monkeypatch):
     sim.advance(0.05)
     assert sim.model.self_collision is None
     assert dict(sim.scene.summary())["self-contact"] == "off"
+    assert "contact     no self-collision" in describe(sim)  # what pvcloth info prints
 
 
 def test_the_scene_file_turns_it_on_with_its_thickness():
@@ -124,6 +126,10 @@ def test_the_scene_file_turns_it_on_with_its_thickness():
     gap = (1.6 / 31) * (0.6 / 31) / np.hypot(1.6 / 31, 0.6 / 31)
     assert sim.model.self_collision.thickness == pytest.approx(0.3 * gap)
     assert "friction 0.3" in dict(scene.summary())["self-contact"]
+    # pvcloth info says so, with the thickness, the friction and the step limit
+    said = f"self-collision on: layers kept {1e3 * 0.3 * gap:.3g} mm apart, friction 0.3; "
+    said += f"steps are split to at most {sim.contact_step():.3g} s"
+    assert said in describe(sim)
 
 
 @pytest.mark.parametrize(

@@ -28,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 import html
 import math
+import re
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
@@ -1022,5 +1023,41 @@ def load_scene(path: str | Path) -> Scene:
         raise SceneError("", f"{path}: not valid TOML: {error}") from None
     except RecursionError:
         raise SceneError("", f"{path}: its tables or lists are nested too deeply") from None
+    if not data:
+        raise SceneError(
+            "",
+            f"{path} sets nothing: a scene file needs at least one key, e.g. "
+            f"cloth.resolution = [16, 16] (the bundled scenes are examples)",
+        )
     data.setdefault("name", path.stem)
-    return Scene.from_dict(data)
+    try:
+        return Scene.from_dict(data)
+    except SceneError as error:
+        line = _line_setting(text, error.key)
+        where = f"{path}, line {line}" if line else str(path)
+        raise SceneError(error.key, error.message, where) from None
+
+
+def _line_setting(text: str, key: str) -> int | None:
+    """The line (from 1) of a TOML text that sets the dotted ``key`` (list
+    indices dropped), or ``None`` unless exactly one line does. Tables are
+    followed by their ``[headers]``; an inline table counts as the line of
+    the key it is assigned to."""
+    wanted = re.sub(r"\[\d+\]", "", key)
+    if not wanted:
+        return None
+    table, lines = "", []
+    for number, line in enumerate(text.splitlines(), 1):
+        code = line.split("#", 1)[0].strip()  # a '#' inside a string ends the search early
+        header = re.fullmatch(r"\[\[?([^\[\]]+)\]\]?", code)
+        if header:
+            table = header.group(1).replace('"', "").replace(" ", "")
+            lines += [number] if table == wanted else []
+            continue
+        assigned = re.match(r"([\w.\-\" ]+?)\s*=", code)
+        if assigned:
+            name = assigned.group(1).replace('"', "").replace(" ", "")
+            full = f"{table}.{name}" if table else name
+            if full == wanted or wanted.startswith(full + "."):
+                lines.append(number)
+    return lines[0] if len(lines) == 1 else None
