@@ -168,8 +168,23 @@ def test_the_window_opens_takes_keys_and_a_drag_and_quits(workdir, x_display):
         _xdotool(x_display, "keydown", "shift", "mouseup", "1", "keyup", "shift")
         key("space")  # resume
         time.sleep(2.0)
-        after = _cloth_pixels(screenshot(3))
+        shot = screenshot(3)
+        after = _cloth_pixels(shot)
         assert after[target].any(), "the cloth did not follow the mouse and stay pinned there"
+
+        def slider_ink(path: Path) -> int:
+            """Dark pixels of the stiffness slider's bar and knob (top right;
+            the background there is light, the cloth below it)."""
+            return int((iio.imread(path)[185:216, 785:996, :3].mean(axis=2) < 180).sum())
+
+        shown = slider_ink(shot)
+        assert shown > 200, "the stiffness slider is not where the window puts it"
+        key("i")  # next integrator; VTK's widgets would also toggle themselves at "i"
+        time.sleep(0.5)
+        key("b")  # back to the start
+        time.sleep(1.0)
+        assert slider_ink(screenshot(4)) > 0.8 * shown, "i or b hid the stiffness slider"
+        assert app.poll() is None
         key("q")
         out, err = app.communicate(timeout=60)
     finally:
@@ -178,5 +193,5 @@ def test_the_window_opens_takes_keys_and_a_drag_and_quits(workdir, x_display):
             app.communicate()
     assert app.returncode == 0, err
     assert err == ""
-    for n in (2, 3):  # each shot's path was printed
+    for n in (2, 3, 4):  # each shot's path was printed
         assert f"pvcloth_hanging_{n:03d}.png" in out

@@ -67,6 +67,11 @@ HELP = (
     + "\n  [ ]: halve / double the step"
 )
 
+#: Font of the help text: VTK's built-in Arial draws ``[`` and ``]`` as
+#: round brackets, so the help's "[ ]" read as "( )"; its Courier draws
+#: them square (and lines up the key column).
+HELP_FONT = "courier"
+
 _NO_DISPLAY_HINT = (
     "On a machine without a screen, run it inside a virtual one: "
     "xvfb-run -a pvcloth run SCENE (Debian/Ubuntu: apt-get install xvfb xauth)."
@@ -202,7 +207,7 @@ class ClothApp:
         )
         self.status.GetTextProperty().SetVerticalJustificationToTop()
         self.help = self.plotter.add_text(
-            HELP, position=(0.01, 0.01), viewport=True, font_size=6, name="help"
+            HELP, position=(0.01, 0.01), viewport=True, font_size=6, font=HELP_FONT, name="help"
         )
 
     def _add_keys(self):
@@ -244,7 +249,7 @@ class ClothApp:
     def _slider(self, callback, limits, value: float, title: str, height: float, fmt: str):
         """A slider in the right-hand column at ``height`` (normalized display
         coordinates, so it keeps its place and size whatever the window's)."""
-        return self.plotter.add_slider_widget(
+        slider = self.plotter.add_slider_widget(
             callback,
             rng=list(limits),
             value=value,
@@ -257,6 +262,10 @@ class ClothApp:
             slider_width=0.02,
             tube_width=0.005,
         )
+        # A VTK widget turns itself on and off at the "i" key unless told
+        # not to: "i" (next integrator) hid the stiffness slider.
+        slider.KeyPressActivationOff()
+        return slider
 
     def _show_wind_slider(self, on: bool) -> None:
         (self.wind_slider.On if on else self.wind_slider.Off)()
@@ -448,8 +457,15 @@ class ClothApp:
         if self.message.startswith("DIVERGED"):  # restarting after a divergence runs again
             self.physics.paused = False
         self.message = ""
-        self.request(self.sim.reset)
-        self.physics.forget_pace()
+
+        def back_to_start():
+            self.sim.reset()
+            # Here, after the reset and on the physics thread: forgotten
+            # before it, a sample taken at the old time could be kept and
+            # the first span measured backwards (x-16 of real time).
+            self.physics.forget_pace()
+
+        self.request(back_to_start)
 
     def toggle_wind(self):
         """Turn the wind off, or back on at the slider's speed."""

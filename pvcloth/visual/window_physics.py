@@ -59,6 +59,8 @@ class RealTimeMeter:
         self.samples: collections.deque[tuple[float, float]] = collections.deque()
 
     def add(self, wall: float, sim_time: float) -> None:
+        if self.samples and sim_time < self.samples[-1][1]:  # the cloth went back (a reset)
+            self.samples.clear()
         self.samples.append((wall, sim_time))
         while len(self.samples) > 2 and wall - self.samples[1][0] >= MEASURE_WINDOW:
             self.samples.popleft()
