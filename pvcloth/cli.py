@@ -9,12 +9,14 @@ from pathlib import Path
 
 from pvcloth.errors import InputError, PvclothError
 from pvcloth.scene.overrides import parse_assignment, parse_value
-from pvcloth.scene.spec import STABILITY_POLICIES, load_scene
+from pvcloth.scene.spec import MEASURING_INTEGRATORS, STABILITY_POLICIES, load_scene
 from pvcloth.scene.validation import real
 from pvcloth.signals import Terminated, check, deferred, handled
 
 
-def _add_overrides(parser: argparse.ArgumentParser) -> None:
+def _add_overrides(parser: argparse.ArgumentParser, one_integrator: bool = True) -> None:
+    """The scene argument and the options that change it; ``one_integrator``
+    False leaves ``--integrator`` out (for commands that take several)."""
     parser.add_argument("scene", help="scene file (TOML), e.g. data/scenes/hanging.toml")
     parser.add_argument(
         "--set",
@@ -30,14 +32,17 @@ def _add_overrides(parser: argparse.ArgumentParser) -> None:
         help="the same as --set camera.view=...: the direction the camera looks from "
         "(an explicit camera: --set camera.position=[X,Y,Z] --set camera.focal_point=[X,Y,Z])",
     )
-    parser.add_argument("--integrator", help="the same as --set solver.integrator=NAME")
+    if one_integrator:
+        parser.add_argument("--integrator", help="the same as --set solver.integrator=NAME")
     parser.add_argument("--dt", type=float, help="the same as --set solver.dt=SECONDS")
     parser.add_argument(
         "--tolerance",
         type=float,
         metavar="METRES",
         help="the same as --set solver.tolerance=METRES: steps chosen for this error "
-        "(per simulated second; needs --integrator rk23)",
+        "(per simulated second) by an integrator that measures it: "
+        + ", ".join(MEASURING_INTEGRATORS)
+        + ", or auto (the cheapest of them on this scene)",
     )
     parser.add_argument(
         "--stability",
@@ -66,7 +71,7 @@ def _scene(args):
         key, text = parse_assignment(item)
         changes[key] = parse_value(text)
     for key, value in (
-        ("solver.integrator", args.integrator),
+        ("solver.integrator", getattr(args, "integrator", None)),
         ("solver.dt", args.dt),
         ("solver.stability", args.stability),
         ("solver.tolerance", args.tolerance),
@@ -299,7 +304,7 @@ def build_parser() -> argparse.ArgumentParser:
         "the wall time it takes per simulated second and its RMS distance from a fine RK4 "
         "reference run alongside.",
     )
-    _add_overrides(compare)
+    _add_overrides(compare, one_integrator=False)
     compare.add_argument(
         "--integrators",
         required=True,

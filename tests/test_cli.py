@@ -63,3 +63,30 @@ def test_console_module_runs():
         check=True,
     )
     assert "simulated 0.05 s in 200 steps" in result.stdout
+
+
+def _help(capsys, *command: str) -> str:
+    try:
+        main([*command, "--help"])
+    except SystemExit as done:
+        assert done.code == 0
+    return " ".join(capsys.readouterr().out.split())  # argparse wraps lines
+
+
+def test_help_says_which_integrators_a_tolerance_needs(capsys):
+    from pvcloth.physics.integrators import INTEGRATORS
+
+    text = _help(capsys, "simulate")
+    measuring = sorted(name for name, method in INTEGRATORS.items() if method.embedded)
+    for name in sorted(INTEGRATORS):
+        assert (name in text.split("--tolerance METRES", 2)[2].split("--stability")[0]) == (
+            name in measuring
+        ), name
+
+
+def test_compare_takes_integrators_only_in_the_plural(capsys):
+    import re
+
+    text = _help(capsys, "compare")
+    assert "--integrators" in text
+    assert not re.search(r"--integrator\b(?!s)", text)

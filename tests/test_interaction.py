@@ -229,6 +229,9 @@ def test_back_to_the_start_while_running_never_shows_a_negative_pace(app):
         app.wait()
         assert app.sim.time < 1.3  # it went back and ran from there
         assert shown and min(shown) >= 0.0, shown
+    # the status speaks of frames, not of the physics thread's chunks
+    assert "each frame: physics" in app.status.GetInput()
+    assert "chunk" not in app.status.GetInput()
 
 
 def test_the_pace_meter_starts_again_when_the_cloth_goes_back():

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pvcloth
 from pvcloth.physics.integrators import INTEGRATORS
-from pvcloth.scene.spec import INTEGRATOR_NAMES
+from pvcloth.scene.spec import INTEGRATOR_NAMES, MEASURING_INTEGRATORS
 
 PACKAGE = Path(pvcloth.__file__).parent
 #: What the physics and scene layers must never import.
@@ -92,6 +92,8 @@ def test_imports_point_down_the_layers_only():
 
 def test_every_registered_integrator_is_a_name_scenes_accept():
     assert sorted(INTEGRATORS) == sorted(INTEGRATOR_NAMES)
+    measuring = sorted(name for name, method in INTEGRATORS.items() if method.embedded)
+    assert measuring == sorted(MEASURING_INTEGRATORS)
 
 
 def test_every_error_class_lives_in_errors_and_is_exported():

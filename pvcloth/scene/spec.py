@@ -226,6 +226,11 @@ INTEGRATOR_NAMES = (
     "symplectic_euler",
     "verlet",
 )
+#: The integrators that measure their own error, so ``solver.tolerance`` can
+#: choose their steps (``embedded`` in :mod:`pvcloth.physics.integrators`;
+#: a test keeps the two equal, so the command line can say so without
+#: importing the physics).
+MEASURING_INTEGRATORS = ("backward_euler", "fast_mass_spring", "implicit_euler", "rk23")
 
 
 @dataclass(frozen=True)

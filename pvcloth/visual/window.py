@@ -388,8 +388,8 @@ class ClothApp:
         busy = f"   (a step running for {running:.1f} s)" if running > 2.0 / self.fps else ""
         text = (
             f"{state}t = {self.sim.time:6.2f} s{pace}{slow}{busy}\n"
-            f"{'' if fps is None else f'{fps:4.1f} fps   '}physics {self.physics.chunk_ms:5.1f} ms"
-            f" per chunk   draw {self.render_ms:5.1f} ms\n"
+            f"{'' if fps is None else f'{fps:4.1f} fps   '}each frame: physics "
+            f"{self.physics.chunk_ms:.1f} ms, drawing {self.render_ms:.1f} ms\n"
             f"{self.sim.integrator.name}, dt {self.sim.dt:.3g} s ({self.sim.dt_source}){blowing}"
         )
         if self.message:
