@@ -117,6 +117,26 @@ def test_moving_pins_and_wind_run_with_adaptive_steps():
     assert np.isfinite(sim.positions).all() and sim.time == pytest.approx(0.3)
 
 
+def test_a_tolerance_without_an_integrator_lets_a_probe_choose(tmp_path, capsys):
+    """A scene file that gives an error and names no integrator runs with
+    the one the probe of ``"auto"`` finds cheapest, and info says which."""
+    from pvcloth.cli import main
+    from pvcloth.physics.integrators import INTEGRATORS
+
+    path = tmp_path / "tolerant.toml"
+    path.write_text("[cloth]\nresolution = [8, 8]\n\n[solver]\ntolerance = 1e-3\n")
+    assert pvcloth.load_scene(path).solver.integrator == "auto"
+    sim = Simulation.from_file(path)
+    assert sim.choice is not None and sim.scene.solver.integrator == sim.integrator.name
+    assert INTEGRATORS[sim.integrator.name].embedded and sim.controller is not None
+    sim.advance(0.1)
+    assert np.isfinite(sim.positions).all()
+    assert main(["info", str(path)]) == 0
+    said = capsys.readouterr().out
+    assert f"integrator  {sim.integrator.name} " in said
+    assert "chosen by   solver.integrator = 'auto'" in said
+
+
 @pytest.mark.parametrize(
     "changes, message",
     [

@@ -240,8 +240,10 @@ class SolverSpec:
 
     Parameters
     ----------
-    integrator : str
-        A name from :data:`pvcloth.INTEGRATORS`.
+    integrator : str, optional
+        A name from :data:`pvcloth.INTEGRATORS`, or ``"auto"`` (with a
+        tolerance). Left out: ``"auto"`` when a tolerance is given, else
+        ``"symplectic_euler"``.
     dt : float, optional
         Step in seconds (0 < dt <= 10). Left out (``None``), the simulation
         takes the largest step that is at most half the integrator's estimated
@@ -283,9 +285,11 @@ class SolverSpec:
     6
     >>> SolverSpec("auto", tolerance=1e-3, max_dt=0.01).max_dt
     0.01
+    >>> SolverSpec(tolerance=1e-3).integrator  # a tolerance alone lets a probe choose
+    'auto'
     """
 
-    integrator: str = "symplectic_euler"
+    integrator: str | None = None
     dt: float | None = None
     stability: str = "refuse"
     iterations: int | None = None
@@ -297,6 +301,8 @@ class SolverSpec:
         _set(self, "stability", choice("stability", self.stability, STABILITY_POLICIES))
         if self.tolerance is not None:
             _set(self, "tolerance", real("tolerance", self.tolerance, minimum=1e-12, maximum=1.0))
+        if self.integrator is None:
+            _set(self, "integrator", AUTO if self.tolerance is not None else "symplectic_euler")
         for key in ("min_dt", "max_dt"):
             value = getattr(self, key)
             if value is None:
