@@ -50,8 +50,12 @@ def _subcommand(command: str) -> str:
 COMMANDS = documented_commands(README)
 #: Commands on real files (the others are templates: SCENE.toml, OUT.gif...).
 RUNNABLE = [c for c in COMMANDS if "data/scenes/" in c and _subcommand(c) != "run"]
-#: Minutes of work as written (a 120-run sweep, every integrator at 8 steps).
-SLOW = {"sweep", "tradeoff"}
+#: Commands that take half a minute to minutes as written (a 120-run sweep,
+#: every integrator at 8 steps, three panels against an RK4 reference): the
+#: validation tier runs them; their quick twins run the same code smaller
+#: (test_interrupts' sweep from the console, test_tradeoff's command,
+#: test_view's compare).
+SLOW = {"sweep", "tradeoff", "compare"}
 
 
 def subcommands() -> set[str]:
