@@ -40,7 +40,8 @@ from pathlib import Path
 from smoke import SMOKE
 
 import pvcloth
-from pvcloth.studies.runs import dividing_step, rms_distance
+from pvcloth.physics.reference import rms_distance
+from pvcloth.studies.runs import dividing_step
 
 HERE = Path(__file__).parent
 FRAME = 1 / 60

@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 
 import pvcloth
-from pvcloth.studies.runs import rms_distance
+from pvcloth.physics.reference import rms_distance
 
 HERE = Path(__file__).parent
 EXPLICIT = ("symplectic_euler", "verlet", "rk4")

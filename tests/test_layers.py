@@ -17,6 +17,8 @@ from pvcloth.scene.spec import INTEGRATOR_NAMES, MEASURING_INTEGRATORS
 PACKAGE = Path(pvcloth.__file__).parent
 #: What the physics and scene layers must never import.
 OUTSIDE = ("pyvista", "vtk", "vtkmodules", "matplotlib", "dask", "distributed", "tqdm", "meshio")
+#: The one import up the layers, inside Simulation.mesh and Simulation.plot.
+ASKED_FOR = {("simulation.py", "pvcloth.visual.view")}
 
 
 def _modules(folder: str) -> list[str]:
@@ -58,15 +60,71 @@ print(json.dumps(sorted(m.split(".")[0] for m in sys.modules)))
     assert not loaded & set(OUTSIDE), f"physics loaded {sorted(loaded & set(OUTSIDE))}"
 
 
-def _imports(path: Path) -> set[str]:
+def _imports(path: Path, annotations: bool = True, names: bool = False) -> set[str]:
+    """Modules ``path`` imports, inside functions too; ``annotations``
+    False leaves out those under ``if TYPE_CHECKING:`` (never run), and
+    ``names`` adds ``module.name`` for each ``from module import name`` (the
+    name may be a module)."""
     tree = ast.parse(path.read_text())
+    skipped = set()
+    if not annotations:
+        for node in ast.walk(tree):
+            if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+                skipped.update(id(inner) for inner in ast.walk(node))
     found = set()
     for node in ast.walk(tree):
+        if id(node) in skipped:
+            continue
         if isinstance(node, ast.ImportFrom) and node.module:
             found.add(node.module)
+            if names:
+                found.update(f"{node.module}.{alias.name}" for alias in node.names)
         elif isinstance(node, ast.Import):
             found.update(alias.name for alias in node.names)
     return found
+
+
+def _module_graph() -> dict[str, set[str]]:
+    """pvcloth's modules and the pvcloth modules each imports when it runs."""
+    paths = {
+        ".".join(("pvcloth", *path.relative_to(PACKAGE).with_suffix("").parts)).removesuffix(
+            ".__init__"
+        ): path
+        for path in PACKAGE.rglob("*.py")
+    }
+    return {
+        name: {m for m in _imports(path, annotations=False, names=True) if m in paths and m != name}
+        for name, path in paths.items()
+    }
+
+
+def test_no_module_imports_one_that_imports_it_back():
+    # A cycle, however long, through imports that run (lazy ones included).
+    graph = _module_graph()
+    graph["pvcloth.physics.simulation"].discard("pvcloth.visual.view")  # see ASKED_FOR
+    done, path = set(), []
+
+    def visit(name: str) -> None:
+        if name in path:
+            cycle = path[path.index(name) :] + [name]
+            raise AssertionError("import cycle: " + " -> ".join(cycle))
+        if name in done:
+            return
+        path.append(name)
+        for other in sorted(graph[name]):
+            if other != "pvcloth":  # the package's __init__ gathers the public names
+                visit(other)
+        path.pop()
+        done.add(name)
+
+    for name in sorted(graph):
+        visit(name)
+
+
+def test_the_visual_layer_does_not_reach_into_the_studies():
+    for path in (PACKAGE / "visual").rglob("*.py"):
+        reached = sorted(m for m in _imports(path) if m.startswith("pvcloth.studies"))
+        assert not reached, f"{path.name} imports {reached}"
 
 
 def test_imports_point_down_the_layers_only():
@@ -77,8 +135,9 @@ def test_imports_point_down_the_layers_only():
         "physics": ("pvcloth.errors", "pvcloth.scene", "pvcloth.signals", "pvcloth.physics"),
     }
     # The one way up: Simulation.mesh and Simulation.plot hand the user the
-    # view layer's mesh, imported inside those two methods, when asked for.
-    asked_for = {("simulation.py", "pvcloth.visual.view")}
+    # view layer's mesh, imported inside those two methods, when asked for
+    # (it goes when Simulation becomes a facade above the physics, issue 37).
+    asked_for = ASKED_FOR
     for folder, allowed in below.items():
         for path in (PACKAGE / folder).rglob("*.py"):
             for module in _imports(path):

@@ -19,10 +19,10 @@ from pvcloth.studies.sweep import (
     parse_sets,
     parse_values,
     read_rows,
-    reference_step,
     run_reference,
     run_sweep,
     run_unit,
+    shared_reference_step,
     summary,
 )
 
@@ -77,7 +77,7 @@ def serial_rows(scene, sets):
         groups.setdefault(unit.physics, []).append(unit)
     rows = {}
     for members in groups.values():
-        dt = reference_step([u.scene for u in members], DURATION)
+        dt = shared_reference_step([u.scene for u in members], DURATION)
         reference = run_reference(members[0].scene, dt, DURATION)
         for unit in members:
             rows[unit.id] = run_unit(unit, reference, DURATION)

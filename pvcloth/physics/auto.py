@@ -30,7 +30,9 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 from pvcloth.errors import DivergenceError
 from pvcloth.scene.spec import Scene
@@ -77,35 +79,45 @@ class Choice:
         )
 
 
-def choose_integrator(scene: Scene) -> Choice:
+def choose_integrator(scene: Scene, simulation: Callable[[Scene], Any]) -> Choice:
     """Probe every candidate on ``scene`` (which has a tolerance) and return
     the cheapest (see the module's description).
+
+    Parameters
+    ----------
+    scene : Scene
+        With ``solver.tolerance``; its integrator is replaced by each
+        candidate in turn.
+    simulation : callable
+        Builds the simulation that runs a probe from a scene:
+        :class:`~pvcloth.physics.simulation.Simulation`, which calls this
+        function (passed in, so this module does not import it back).
 
     Examples
     --------
     >>> import pvcloth
     >>> from pvcloth.physics.auto import choose_integrator
     >>> scene = pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8)))
-    >>> choice = choose_integrator(scene.with_overrides({"solver.tolerance": 1e-3}))
+    >>> tolerant = scene.with_overrides({"solver.tolerance": 1e-3})
+    >>> choice = choose_integrator(tolerant, pvcloth.Simulation)
     >>> choice.name in ("rk23", "implicit_euler"), sorted(choice.costs)
     (True, ['implicit_euler', 'rk23'])
     """
     costs, probed = {}, {}
     for name in CANDIDATES:
-        costs[name], probed[name] = _probe(scene.with_overrides({"solver.integrator": name}))
+        candidate = scene.with_overrides({"solver.integrator": name})
+        costs[name], probed[name] = _probe(simulation, candidate)
     best = min(CANDIDATES, key=costs.get)
     return Choice(best, costs, probed)
 
 
-def _probe(scene: Scene) -> tuple[float, float]:
+def _probe(simulation: Callable[[Scene], Any], scene: Scene) -> tuple[float, float]:
     """Wall seconds per simulated second of ``scene`` over a short run, and
     the simulated seconds run. The first step is not timed (it compiles
     kernels and factorises); then one step at a time, so that a slow
     candidate stops soon after :data:`PROBE_WALL`."""
-    from pvcloth.physics.simulation import Simulation  # the simulation imports this module
-
     try:
-        sim = Simulation(scene)
+        sim = simulation(scene)
         sim.advance(sim.controller.step)
         begun, start = sim.time, time.perf_counter()
         while sim.time - begun < PROBE_TIME and time.perf_counter() - start < PROBE_WALL:

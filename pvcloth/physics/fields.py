@@ -89,7 +89,7 @@ def point_fields(sim: Simulation, names, reference=None) -> dict[str, np.ndarray
     ``velocity`` (N, 3) m/s, ``speed`` m/s, ``stretch`` (length over rest
     length), ``force`` N and ``energy`` J/m^2 (:mod:`pvcloth.physics.fields`),
     ``pinned`` (1 or 0), and ``error`` m, the distance from ``reference``
-    (a :class:`~pvcloth.studies.runs.FollowingReference`) at the same time.
+    (a :class:`~pvcloth.physics.reference.FollowingReference`) at the same time.
     """
     state = sim.state  # one state throughout, should a physics thread replace it
     x = state.x.copy()

@@ -850,7 +850,7 @@ class Simulation:
         what a checkpoint saves, names it; other scenes as they are."""
         if scene.solver.integrator != AUTO:
             return scene
-        self.choice = choose_integrator(scene)
+        self.choice = choose_integrator(scene, type(self))
         return scene.with_overrides({"solver.integrator": self.choice.name})
 
     def _starting_step(self, tolerance: float) -> float:

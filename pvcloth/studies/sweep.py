@@ -44,6 +44,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from pvcloth.errors import SceneError, SweepError
+from pvcloth.physics.reference import reference_run, reference_step, rms_distance
 from pvcloth.scene.overrides import parse_value
 from pvcloth.scene.spec import Scene
 from pvcloth.signals import deferred
@@ -163,15 +164,15 @@ def expand(scene: Scene, sets: dict[str, list]) -> list[Unit]:
 # -- work -------------------------------------------------------------------------
 
 
-def reference_step(scenes: list[Scene], duration: float) -> float:
+def shared_reference_step(scenes: list[Scene], duration: float) -> float:
     """The step of the reference shared by ``scenes`` (one physics, several
-    solver settings): see :func:`pvcloth.studies.runs.reference_step`."""
-    return runs.reference_step(scenes[0], min(runs.scene_step(s) for s in scenes), duration)
+    solver settings): see :func:`pvcloth.physics.reference.reference_step`."""
+    return reference_step(scenes[0], min(runs.scene_step(s) for s in scenes), duration)
 
 
 def run_reference(scene: Scene, dt: float, duration: float) -> dict:
     """Positions and energy of the fine solution (a Dask task)."""
-    sim = runs.reference_run(scene, duration, dt)
+    sim = reference_run(scene, duration, dt)
     return {"x": np.array(sim.positions), "energy": sim.energy()["total"], "dt": dt}
 
 
@@ -182,7 +183,7 @@ def run_unit(unit: Unit, reference: dict, duration: float) -> dict:
     run = runs.timed_run(scene, duration, dt=dt)
     rms = energy = math.nan
     if run.stable:
-        rms = runs.rms_distance(run.sim.positions, reference["x"])
+        rms = rms_distance(run.sim.positions, reference["x"])
         energy = float(run.sim.energy()["total"])
     return {
         "id": unit.id,
@@ -337,7 +338,7 @@ def run_sweep(
             references = {}
             for key, members in groups.items():
                 if any(u in todo for u in members):
-                    dt = reference_step([u.scene for u in members], duration)
+                    dt = shared_reference_step([u.scene for u in members], duration)
                     references[key] = client.submit(
                         run_reference, members[0].scene, dt, duration, key=f"reference-{key}"
                     )

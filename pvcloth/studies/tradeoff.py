@@ -2,7 +2,7 @@
 
 Each run simulates the same scene for the same time and is compared with a
 reference run (RK4 at a quarter of the smallest step asked for, see
-:mod:`pvcloth.studies.runs`): the RMS
+:mod:`pvcloth.physics.reference`): the RMS
 distance of the points at the end, the relative difference of total energy
 at the end (the numerical energy drift, since the reference loses only what
 damping takes), the wall time per simulated second, and whether it stayed
@@ -38,14 +38,9 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from pvcloth.physics.integrators import INTEGRATORS
+from pvcloth.physics.reference import reference_run, reference_step, rms_distance
 from pvcloth.physics.simulation import Simulation
-from pvcloth.studies.runs import (
-    dividing_step,
-    reference_run,
-    reference_step,
-    rms_distance,
-    timed_run,
-)
+from pvcloth.studies.runs import dividing_step, timed_run
 
 #: The converged method the approximate implicit ones are split against.
 CONVERGED = "backward_euler"

@@ -6,7 +6,7 @@ simulated time and draws them under one camera that frames all the cloths,
 each panel labelled with its integrator and step, the wall time it took per
 simulated second (its own clock, measured while the movie is made) and its
 RMS distance from one shared reference: a fine RK4 run
-(:class:`pvcloth.studies.runs.FollowingReference`, at a quarter of the
+(:class:`pvcloth.physics.reference.FollowingReference`, at a quarter of the
 smallest step compared). A panel whose simulation diverges stops on its
 last good state and says so; the others go on.
 """
@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pvcloth.errors import DivergenceError, InputError
+from pvcloth.physics.reference import FollowingReference
 from pvcloth.physics.simulation import Simulation
 from pvcloth.scene.spec import Scene
-from pvcloth.studies.runs import FollowingReference
 from pvcloth.visual.movie import RenderStats, check_output, record
 
 #: Most panels in one movie.

@@ -197,7 +197,7 @@ def render(
         Colour the cloth by a field (``"stretch"``, ``"speed"``, ``"force"``,
         ``"energy"`` or ``"error"``; see :data:`pvcloth.visual.view.FIELDS`),
         with a scalar bar in its unit. ``"error"`` runs a fine RK4 reference
-        beside the simulation (:class:`pvcloth.studies.runs.FollowingReference`).
+        beside the simulation (:class:`pvcloth.physics.reference.FollowingReference`).
     clim : (float, float), optional
         Fixed colour range; by default it grows with the values seen.
     cmap : str, optional
@@ -236,7 +236,7 @@ def render(
     check_cmap(cmap)
     reference = None
     if color == "error":
-        from pvcloth.studies.runs import FollowingReference
+        from pvcloth.physics.reference import FollowingReference
 
         reference = FollowingReference(sim)
         if before_frame is not None:

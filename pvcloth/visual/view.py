@@ -12,7 +12,7 @@ cloth:
   surface and its normals recomputed by a VTK pipeline on every change).
 
 Fields (:data:`FIELDS`) are per point, with units; ``error`` needs a
-reference run beside the simulation (:class:`pvcloth.studies.runs.FollowingReference`).
+reference run beside the simulation (:class:`pvcloth.physics.reference.FollowingReference`).
 """
 
 from __future__ import annotations
