@@ -16,7 +16,7 @@ from conftest import ROOT
 from pvcloth import Scene, SceneError, SelfCollisionSpec, Simulation, load_scene
 from pvcloth.errors import DivergenceError
 from pvcloth.info import describe
-from pvcloth.physics import self_collision
+from pvcloth.physics import self_collision, topology
 from pvcloth.physics.integrators import INTEGRATORS
 
 RNG = np.random.default_rng(7)
@@ -53,9 +53,9 @@ def test_closest_points_of_two_segments_are_no_farther_than_any_sampled_pair(par
 def test_the_grid_triangles_match_the_counters():
     from intersections import grid_triangles
 
-    ours = {tuple(t) for t in self_collision.grid_triangles((5, 7)).tolist()}
+    ours = {tuple(t) for t in topology.triangles((5, 7)).tolist()}
     assert ours == {tuple(t) for t in grid_triangles(7, 5).tolist()} and len(ours) == 48
-    edges = self_collision.grid_edges((5, 7))
+    edges = topology.edges((5, 7))
     from_triangles = {
         tuple(sorted(e))
         for t in grid_triangles(7, 5)
@@ -304,7 +304,7 @@ def test_the_hash_grid_lists_exactly_the_overlapping_boxes(kind):
     x = RNG.normal(scale=0.05, size=(64, 3))
     size = RNG.uniform(0.0, 0.03, size=(64, 1)) * (1 + 9 * (RNG.random((64, 1)) < 0.1))
     lo, hi = x - size, x + size
-    items = self_collision.grid_triangles(shape) if kind == 0 else self_collision.grid_edges(shape)
+    items = topology.triangles(shape) if kind == 0 else topology.edges(shape)
     ilo = lo[items].min(axis=1)
     ihi = hi[items].max(axis=1)
     qlo, qhi = (lo, hi) if kind == 0 else (ilo, ihi)

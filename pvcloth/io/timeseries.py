@@ -44,6 +44,7 @@ import numpy as np
 
 from pvcloth.errors import ExportInterrupted, InputError
 from pvcloth.io.files import remove_orphaned_temporaries
+from pvcloth.physics import topology
 from pvcloth.physics.fields import MESH_FIELDS, point_fields
 from pvcloth.progress import frame_bar
 from pvcloth.signals import deferred
@@ -54,16 +55,6 @@ if TYPE_CHECKING:  # for annotations only
 FORMATS = (".pvd", ".xdmf", ".obj")
 
 
-def quads(resolution: tuple[int, int]) -> np.ndarray:
-    """Quadrilateral cells ``(M, 4)`` of a grid of ``(nx, ny)`` points, in
-    VTK point order, counter-clockwise seen from +normal."""
-    nx, ny = resolution
-    index = np.arange(nx * ny).reshape(ny, nx)
-    return np.stack(
-        [index[:-1, :-1], index[:-1, 1:], index[1:, 1:], index[1:, :-1]], axis=-1
-    ).reshape(-1, 4)
-
-
 def grid_texture_coordinates(resolution: tuple[int, int]) -> np.ndarray:
     """``(N, 2)`` texture coordinates of a grid's points, 0 to 1 along each
     side, in point order."""
@@ -72,24 +63,12 @@ def grid_texture_coordinates(resolution: tuple[int, int]) -> np.ndarray:
     return np.column_stack([u.ravel(), v.ravel()])
 
 
-def vertex_normals(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Unit normals ``(N, 3)`` at the points of quads ``faces`` ``(M, 4)``:
-    the sum of the normals of the faces around each point (each the cross
-    product of its diagonals, so weighted by area)."""
-    diagonals = np.cross(
-        points[faces[:, 2]] - points[faces[:, 0]], points[faces[:, 3]] - points[faces[:, 1]]
-    )
-    normals = np.zeros_like(points)
-    for corner in range(4):
-        np.add.at(normals, faces[:, corner], diagonals)
-    length = np.linalg.norm(normals, axis=1, keepdims=True)
-    return normals / np.where(length > 0, length, 1.0)
-
-
-def write_obj(path: Path, points: np.ndarray, faces: np.ndarray, texture: np.ndarray) -> None:
-    """One Wavefront OBJ: vertices (m), texture coordinates, vertex normals
-    and quads indexing all three alike; the same bytes for the same cloth."""
-    normals = vertex_normals(points, faces)
+def write_obj(path: Path, points: np.ndarray, shape: tuple[int, int], texture: np.ndarray) -> None:
+    """One Wavefront OBJ of a ``shape = (ny, nx)`` grid: vertices (m), texture
+    coordinates, vertex normals (those the view draws with) and quads
+    indexing all three alike; the same bytes for the same cloth."""
+    faces = topology.quads(shape)
+    normals = topology.normals(points, shape)
     index = faces + 1
     corners = np.repeat(index, 3, axis=1).reshape(-1, 4, 3)
     with open(path, "w") as out:
@@ -162,7 +141,7 @@ def export(
         raise InputError("output", f"unknown extension {path.suffix!r}; use one of {FORMATS}")
     frame_numbers = sim.frames(frames, fps)  # checked now, before any file is touched
     path.parent.mkdir(parents=True, exist_ok=True)
-    cells = [("quad", quads(sim.resolution))]
+    cells = [("quad", topology.quads(sim.model.shape))]
     rest = sim.model.rest_positions
     done = 0
     bar = frame_bar(frame_numbers, frames, f"exporting {path.name}", enabled=progress)
@@ -217,7 +196,7 @@ def export(
                     meshio.write(staging / folder / name, mesh)
                     entries.append((sim.time, f"{folder}/{name}"))
                 else:
-                    write_obj(staging / folder / name, sim.positions, cells[0][1], texture)
+                    write_obj(staging / folder / name, sim.positions, sim.model.shape, texture)
                 done += 1
         return path if suffix == ".pvd" else path.with_name(folder)
     except (Exception, KeyboardInterrupt) as error:

@@ -38,6 +38,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from pvcloth.physics import topology
+
 #: Paths shorter than this (m) cannot cross a surface by themselves.
 TINY = 1e-15
 
@@ -216,15 +218,6 @@ class Obstacle:
         raise NotImplementedError(f"{type(self).__name__} has no surface(): give it one to draw it")
 
 
-def _grid_triangles(rows: int, columns: int) -> np.ndarray:
-    """Two triangles per cell of a ``rows`` x ``columns`` vertex grid laid
-    out row by row (counter-clockwise when rows run along +v, columns +u)."""
-    k = np.arange(rows * columns).reshape(rows, columns)
-    a, b = k[:-1, :-1].ravel(), k[:-1, 1:].ravel()
-    c, d = k[1:, 1:].ravel(), k[1:, :-1].ravel()
-    return np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
-
-
 class Sphere(Obstacle):
     """A sphere of ``radius`` about its centre."""
 
@@ -276,7 +269,7 @@ class Sphere(Obstacle):
             axis=-1,
         ).reshape(-1, 3)
         # Rows run from the north pole down: reverse the winding to face out.
-        return self.radius * unit, _grid_triangles(rings + 1, segments + 1)[:, ::-1]
+        return self.radius * unit, topology.triangles((rings + 1, segments + 1))[:, ::-1]
 
 
 class Box(Obstacle):

@@ -105,6 +105,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pvcloth.errors import DivergenceError
+from pvcloth.physics import topology
 
 try:
     from numba import njit, prange
@@ -136,26 +137,6 @@ SKIN = 0.5
 #: cell cannot open its crease that wide, and pushing it to would make
 #: the crease chatter against gravity at rest. No crossing still holds.
 CREASE = 0.2
-
-
-def grid_triangles(shape: tuple[int, int]) -> np.ndarray:
-    """The two triangles of every cell of a ``(ny, nx)`` point grid, as
-    point indices, shape ``(2 (nx-1) (ny-1), 3)``."""
-    ny, nx = shape
-    a = (np.arange(nx - 1)[None, :] + nx * np.arange(ny - 1)[:, None]).ravel()
-    b, c, d = a + 1, a + nx, a + nx + 1
-    return np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]).astype(np.int64)
-
-
-def grid_edges(shape: tuple[int, int]) -> np.ndarray:
-    """Every edge of :func:`grid_triangles` once (along rows, along columns,
-    the cells' diagonals), shape ``(E, 2)``."""
-    ny, nx = shape
-    k = np.arange(nx * ny).reshape(ny, nx)
-    rows = np.stack([k[:, :-1].ravel(), k[:, 1:].ravel()], 1)
-    columns = np.stack([k[:-1, :].ravel(), k[1:, :].ravel()], 1)
-    diagonals = np.stack([k[:-1, :-1].ravel(), k[1:, 1:].ravel()], 1)
-    return np.concatenate([rows, columns, diagonals]).astype(np.int64)
 
 
 @dataclass
@@ -196,8 +177,8 @@ class SelfCollision:
         self.thickness = float(thickness)
         self.friction = float(friction)
         self.reach = 0.5 * self.thickness
-        self.triangles = grid_triangles(self.shape)
-        self.edges = grid_edges(self.shape)
+        self.triangles = topology.triangles(self.shape)
+        self.edges = topology.edges(self.shape)
         ny, nx = self.shape
         self._cells = np.stack(np.divmod(np.arange(nx * ny), nx)[::-1], 1)  # (N, 2): column, row
         self.report = Report()

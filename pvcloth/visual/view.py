@@ -26,6 +26,7 @@ import numpy as np
 import pyvista as pv
 
 from pvcloth.errors import InputError
+from pvcloth.physics import topology
 from pvcloth.physics.fields import MESH_FIELDS, point_fields
 from pvcloth.visual.camera import VIEWS, FramingCamera
 
@@ -151,34 +152,6 @@ def update_cloth_mesh(grid: pv.StructuredGrid, sim: Simulation) -> None:
     grid.points = sim.state.x.copy()
     for name, values in point_fields(sim, MESH_FIELDS).items():
         grid.point_data.set_array(values, name)
-
-
-def grid_faces(shape: tuple[int, int]) -> np.ndarray:
-    """VTK's face array of the quads of a ``(ny, nx)`` point grid."""
-    ny, nx = shape
-    k = np.arange(nx * ny).reshape(ny, nx)
-    a, b, c, d = k[:-1, :-1].ravel(), k[:-1, 1:].ravel(), k[1:, 1:].ravel(), k[1:, :-1].ravel()
-    return np.column_stack([np.full(a.size, 4), a, b, c, d]).ravel()
-
-
-def grid_normals(x: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """Unit normals of the cloth at its points, shape (N, 3): the cross
-    product of the grid's two tangents (central differences inside, one-sided
-    on the border). The front of the cloth is the side they point to.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from pvcloth.visual.view import grid_normals
-    >>> i, j = np.meshgrid(np.arange(3.0), np.arange(2.0))
-    >>> flat = np.column_stack([i.ravel(), j.ravel(), np.zeros(6)])  # in the x-y plane
-    >>> grid_normals(flat, (2, 3))[0].tolist()
-    [0.0, 0.0, 1.0]
-    """
-    grid = x.reshape(shape + (3,))
-    normal = np.cross(np.gradient(grid, axis=1), np.gradient(grid, axis=0)).reshape(-1, 3)
-    length = np.linalg.norm(normal, axis=1, keepdims=True)
-    return normal / np.maximum(length, 1e-300)
 
 
 def nice_ceiling(value: float) -> float:
@@ -398,7 +371,7 @@ class ClothView:
         self.clim: tuple[float, float] | None = None
         plotter.set_background(BACK_COLOR, top="white")
         self._light(plotter)
-        self.surface = pv.PolyData(sim.state.x.copy(), grid_faces(sim.model.shape))
+        self.surface = pv.PolyData(sim.state.x.copy(), topology.vtk_faces(sim.model.shape))
         self._refresh_surface()
         self.actor = self._add_cloth(cmap)
         self.pins = None
@@ -543,7 +516,7 @@ class ClothView:
     def _refresh_surface(self) -> None:
         x = self.sim.state.x.copy()
         self.surface.points = x
-        self.surface.point_data["Normals"] = grid_normals(x, self.sim.model.shape)
+        self.surface.point_data["Normals"] = topology.normals(x, self.sim.model.shape)
         self.surface.point_data.active_normals_name = "Normals"
         if self.field is not None:
             values = point_fields(self.sim, [self.field], self.reference)[self.field]
