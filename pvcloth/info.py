@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pvcloth.physics.simulation import FRAME_DT, SAFE_SHARE, STABLE_SHARE
+from pvcloth.physics.step_policy import STABLE_SHARE, step_origin
 
 if TYPE_CHECKING:  # for annotations only
     from pvcloth.physics.simulation import Simulation
@@ -72,24 +72,13 @@ def describe(sim: Simulation) -> str:
         )
     )
     stable = sim.stable_dt()
-    if sim.dt_source == "auto":
-        if contact < min(FRAME_DT, SAFE_SHARE * stable):
-            origin = "automatic: under the self-collision step, dividing 1/60 s"
-        elif math.isinf(stable):
-            origin = "automatic: one 1/60 s frame"
-        else:
-            origin = "automatic: at most half the stable step, dividing 1/60 s"
-    elif sim.dt_source == "substep":
-        origin = f"substeps of the given {sim.requested_dt:.4g} s"
-    elif sim.dt_source == "adaptive":
-        control = sim.controller
-        origin = (
-            f"adaptive: chosen every step to keep the error under {control.tolerance:g} m per "
-            f"simulated second, between {control.min_step:.3g} and {control.max_step:.3g} s; "
-            f"this is the next step tried"
-        )
-    else:
-        origin = "as given"
+    origin = step_origin(
+        sim.dt_source,
+        stable=stable,
+        contact=contact,
+        requested=sim.requested_dt,
+        controller=sim.controller,
+    )
     lines.append(
         f"integrator  {sim.integrator.name} (order {sim.integrator.order}: "
         f"{sim.integrator.description}), dt = {sim.dt:.4g} s ({origin})"

@@ -10,7 +10,7 @@ whatever step the tolerance allows but pays a linear solve for each. So
 each candidate is run for a short probe on the scene itself, with the
 tolerance and its adaptive steps, and the one with the least wall time per
 simulated second is kept. The stable step enters as the explicit pair's
-largest step (:meth:`pvcloth.Simulation._start_controller`), the
+largest step (:func:`pvcloth.physics.step_policy.step_controller`), the
 stiffness through it and through the implicit solves' iteration counts.
 
 Candidates are the methods whose error estimate bounds their error as the

@@ -13,16 +13,11 @@ from typing import Any
 import numpy as np
 
 from pvcloth.errors import DivergenceError, InputError, SceneError
-from pvcloth.physics.adaptive import (
-    MAX_STEP,
-    MIN_STEP,
-    UNIT_TIME,
-    StepController,
-    steady_step,
-)
+from pvcloth.physics import step_policy
+from pvcloth.physics.adaptive import StepController, steady_step
 from pvcloth.physics.auto import Choice, choose_integrator
 from pvcloth.physics.blas import one_blas_thread
-from pvcloth.physics.integrators import INTEGRATORS, get_integrator
+from pvcloth.physics.integrators import get_integrator
 from pvcloth.physics.model import build_model
 from pvcloth.physics.state import Control, State
 from pvcloth.scene.spec import (
@@ -38,15 +33,6 @@ from pvcloth.scene.validation import choice, integer, real
 
 #: No cloth point moves faster than this (m/s) unless the solver blew up.
 SPEED_LIMIT = 1.0e4
-#: A step counts as stable up to this share of the estimated limit. The
-#: estimate is exact only for the linearised cloth at rest; far from rest,
-#: nonlinear coupling has destabilised steps above about 0.8 of it (and
-#: explicit Euler at 0.9995 of it diverged), so a step just under it is refused.
-STABLE_SHARE = 0.8
-#: Automatic steps and substeps aim at this share of the estimated limit.
-SAFE_SHARE = 0.5
-#: Automatic step of an integrator that is stable at any step: a 60 fps frame.
-FRAME_DT = 1.0 / 60.0
 #: How far ``Simulation.scale_stiffness`` may take the springs from the scene's.
 MIN_STIFFNESS_SCALE, MAX_STIFFNESS_SCALE = 1e-6, 1e6
 #: Top-level scene keys that may change during a run (:meth:`Simulation.update`).
@@ -116,7 +102,8 @@ class Simulation:
     Raises
     ------
     SceneError
-        If the step is above 0.8 of the stable step (:data:`STABLE_SHARE`)
+        If the step is above 0.8 of the stable step
+        (:data:`~pvcloth.physics.step_policy.STABLE_SHARE`)
         and the policy is ``"refuse"``, or if no step is stable.
 
     Examples
@@ -182,28 +169,9 @@ class Simulation:
         return "given" if self.dt == self.requested_dt else "substep"
 
     def _checked_step(self, dt: float | None, policy: str) -> float:
-        """The step to take: automatic when ``dt`` is None, else ``dt`` checked
-        against the stable step as ``policy`` says (with a tolerance, ``dt`` is
-        only the first step the controller tries: not checked)."""
-        if self.scene.solver.tolerance is not None and dt is not None:
-            return min(dt, self.scene.solver.max_dt or MAX_STEP, self.contact_step())
-        if dt is None:
-            return self.automatic_dt()
-        if policy == "ignore":
-            return self._split_for_contact(dt)
-        limit = self._positive_stable_dt()
-        if dt <= STABLE_SHARE * limit:
-            return self._split_for_contact(dt)
-        if policy == "substep":
-            return self._split_for_contact(dt / math.ceil(dt / (SAFE_SHARE * limit)))
-        raise SceneError(
-            "solver.dt",
-            f"{dt:.4g} s is above the largest stable step allowed for {self.integrator.name} "
-            f"on this cloth, {STABLE_SHARE:g} of its estimated limit of {limit:.3g} s (the "
-            f"estimate is exact only near rest). Use dt <= {SAFE_SHARE * limit:.3g} (or leave "
-            f"solver.dt out to get that step automatically), the implicit_euler integrator "
-            f"(stable at any step), or solver.stability = 'substep' to split each step "
-            f"automatically ('ignore' runs it anyway).",
+        """The step to take (:func:`~pvcloth.physics.step_policy.checked_step`)."""
+        return step_policy.checked_step(
+            self.scene, dt, policy, self.integrator.name, self.stable_dt, self.contact_step()
         )
 
     def automatic_dt(self) -> float:
@@ -211,8 +179,8 @@ class Simulation:
         half the stable step (and the :meth:`contact_step`) and divides a
         1/60 s frame (whole steps per frame, so that advancing by frames
         lands exactly on them)."""
-        limit = min(SAFE_SHARE * self._positive_stable_dt(), self.contact_step())
-        return FRAME_DT / max(1, math.ceil(FRAME_DT / limit))
+        stable = step_policy.positive(self.stable_dt(), self.integrator.name)
+        return step_policy.automatic_step(stable, self.contact_step())
 
     def contact_step(self) -> float:
         """The longest step (s) self-collision can hold one layer up on
@@ -220,24 +188,7 @@ class Simulation:
         <pvcloth.physics.self_collision.SelfCollision.longest_step>`); a
         longer step is split into equal substeps under it, whatever the
         stability policy. Infinite without ``[self_collision]``."""
-        contact = self.model.self_collision
-        if contact is None:
-            return math.inf
-        return contact.longest_step(math.hypot(*self.scene.gravity))
-
-    def _split_for_contact(self, dt: float) -> float:
-        return dt / max(1, math.ceil(dt / self.contact_step() - 1e-9))
-
-    def _positive_stable_dt(self) -> float:
-        limit = self.stable_dt()
-        if not limit > 0.0:
-            raise SceneError(
-                "solver.integrator",
-                f"{self.integrator.name} is unstable at every step on this cloth (its stiffest "
-                f"mode is undamped and grows at any dt). Give the springs some damping, or use "
-                f"symplectic_euler, verlet, rk4 or implicit_euler.",
-            )
-        return limit
+        return step_policy.contact_step(self.model, self.scene)
 
     @classmethod
     def from_file(cls, path: str | Path, **overrides) -> Simulation:
@@ -328,12 +279,7 @@ class Simulation:
     def summary(self) -> list[tuple[str, str]]:
         """``(topic, text)`` rows: scene, size, clock, integrator and step, pins."""
         nx, ny = self.resolution
-        origin = {
-            "auto": "automatic",
-            "given": "as given",
-            "substep": "substep",
-            "adaptive": "adaptive",
-        }[self.dt_source]
+        origin = step_policy.STEP_SOURCES[self.dt_source]
         if self.controller is not None:
             origin += (
                 f", tolerance {self.controller.tolerance:g} m, {self.controller.rejected} rejected"
@@ -803,46 +749,20 @@ class Simulation:
 
     def _start_controller(self) -> None:
         """A step controller when the scene gives a tolerance (and an
-        integrator that measures its error), else none."""
-        tolerance = self.scene.solver.tolerance
-        if tolerance is None:
-            self.controller = None
-            return
-        if not self.integrator.embedded:
-            embedded = ", ".join(sorted(n for n, c in INTEGRATORS.items() if c.embedded))
-            raise SceneError(
-                "solver.tolerance",
-                f"{self.integrator.name} does not measure its own error, so no step can be "
-                f"chosen for a tolerance; use solver.integrator = {embedded!r} with it, or "
-                f"leave solver.tolerance out for fixed steps",
-            )
-        solver = self.scene.solver
-        largest = min(solver.max_dt or MAX_STEP, self.contact_step())
-        limit = self.stable_dt()
-        if math.isfinite(limit) and limit > 0.0:
-            # An explicit step beyond its stable one would only be rejected
-            # (measured: 69 rejections in 535 steps at 1e-2 m without this).
-            largest = min(largest, STABLE_SHARE * limit)
-        if solver.min_dt is not None and solver.min_dt > 0.5 * largest:
-            raise SceneError(
-                "solver.min_dt",
-                f"{solver.min_dt:g} s leaves no room under the largest step "
-                f"{self.integrator.name} may take here, {largest:.3g} s (0.8 of its stable "
-                f"step, solver.max_dt or the self-collision step); give at most "
-                f"{0.5 * largest:.3g} s or leave it out",
-            )
-        smallest = min(solver.min_dt or MIN_STEP, 0.5 * largest)
-        first = min(self.dt, largest)
-        if solver.dt is None:
-            first = min(first, max(self._starting_step(tolerance), smallest))
-        self.controller = StepController(
-            tolerance,
-            self.integrator.order,
-            first,
-            min_step=smallest,
-            max_step=largest,
+        integrator that measures its error), else none
+        (:func:`~pvcloth.physics.step_policy.step_controller`)."""
+        self.controller = step_policy.step_controller(
+            self.scene,
+            self.integrator,
+            self.dt,
+            self.stable_dt,
+            self.contact_step(),
+            lambda tolerance: step_policy.starting_step(
+                self.integrator, self.model, self.control, self.state, tolerance
+            ),
         )
-        self.dt = self.controller.step
+        if self.controller is not None:
+            self.dt = self.controller.step
 
     def _resolve_auto(self, scene: Scene) -> Scene:
         """``scene`` with ``solver.integrator = "auto"`` replaced by the
@@ -852,26 +772,6 @@ class Simulation:
             return scene
         self.choice = choose_integrator(scene, type(self))
         return scene.with_overrides({"solver.integrator": self.choice.name})
-
-    def _starting_step(self, tolerance: float) -> float:
-        """A first step for a tolerance when none is given: the one whose
-        error estimate would be about the tolerance's share if the error
-        were the drift of the largest acceleration ``a`` over the step,
-        ``a h^2 / 2 <= tolerance h / 1 s`` for a first-order method and
-        ``a h^3 / 6 <= tolerance h`` for a second-order one (a start, in the
-        manner of Hairer, Norsett and Wanner's, *Solving ODEs I*, II.4: too
-        long a first step costs rejections, each a full step; too short a
-        few steps while it grows fivefold each)."""
-        acceleration = self.integrator.acceleration(
-            self.model, self.control, self.state.x, self.state.v
-        )
-        largest = float(np.sqrt(np.einsum("ij,ij->i", acceleration, acceleration).max(initial=0.0)))
-        if not largest > 0.0:
-            return math.inf
-        share = tolerance / UNIT_TIME
-        if self.integrator.order == 1:
-            return 2.0 * share / largest
-        return math.sqrt(6.0 * share / largest)
 
     def _advance_adaptive(self, seconds: float) -> None:
         """Steps chosen by the controller until exactly ``seconds`` later;

@@ -31,6 +31,7 @@ import numpy as np
 from pvcloth.errors import DisplayError, DivergenceError, SceneError
 from pvcloth.io.files import atomic_write
 from pvcloth.physics.integrators import INTEGRATORS
+from pvcloth.physics.step_policy import STEP_SOURCES
 from pvcloth.scene.spec import WindSpec
 from pvcloth.visual.interaction import ClothDragStyle, DragPath
 from pvcloth.visual.window_physics import PhysicsThread
@@ -390,7 +391,8 @@ class ClothApp:
             f"{state}t = {self.sim.time:6.2f} s{pace}{slow}{busy}\n"
             f"{'' if fps is None else f'{fps:4.1f} fps   '}each frame: physics "
             f"{self.physics.chunk_ms:.1f} ms, drawing {self.render_ms:.1f} ms\n"
-            f"{self.sim.integrator.name}, dt {self.sim.dt:.3g} s ({self.sim.dt_source}){blowing}"
+            f"{self.sim.integrator.name}, dt {self.sim.dt:.3g} s "
+            f"({STEP_SOURCES[self.sim.dt_source]}){blowing}"
         )
         if self.message:
             # Wrapped: a refusal names a step and what to do, longer than a
