@@ -401,3 +401,26 @@ def test_a_drag_does_not_leave_the_controller_at_tiny_steps():
     assert after > 2 * dragged, (dragged, after)
     assert sim.controller.rejected < 0.01 * sim.steps
     assert np.isfinite(sim.positions).all()
+
+
+def test_the_controller_memory_survives_a_checkpoint_old_or_new(tmp_path):
+    """The controller keeps its own memory (get_state/set_state); the six
+    numbers a checkpoint holds come back as they were, and a checkpoint
+    from before the bounds were kept (three numbers) still loads."""
+    sim = adaptive(hanging(8), 1e-4)
+    sim.advance(0.05)
+    kept = sim.controller.get_state()
+    assert kept.shape == (6,) and kept[3] == sim.controller.taken > 0
+    path = pvcloth.save_checkpoint(sim, tmp_path / "run.npz")
+    resumed = pvcloth.load_checkpoint(path)
+    np.testing.assert_array_equal(resumed.controller.get_state(), kept)
+    assert resumed.dt == sim.dt
+    with np.load(path) as data:
+        arrays = dict(data)
+    arrays["controller"] = kept[:3]
+    older = tmp_path / "older.npz"
+    np.savez(older, **arrays)
+    again = pvcloth.load_checkpoint(older)
+    assert again.controller.rejected == int(kept[2]) and again.controller.previous == kept[0]
+    again.advance(0.05)
+    assert np.isfinite(again.positions).all() and again.time == pytest.approx(0.1)

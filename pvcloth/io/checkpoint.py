@@ -59,17 +59,7 @@ def save_checkpoint(sim: Simulation, path: str | os.PathLike) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     extra = {f"integrator_{k}": v for k, v in sim.integrator.get_state().items()}
     if sim.controller is not None:  # an adaptive run resumes with its controller's memory
-        control = sim.controller
-        extra["controller"] = np.array(
-            [
-                -1.0 if control.previous is None else control.previous,
-                float(control._after_rejection),
-                float(control.rejected),
-                control.taken,
-                control.min_step,
-                control.max_step,
-            ]
-        )
+        extra["controller"] = sim.controller.get_state()
     arrays = dict(
         tag=np.array(TAG),
         version=np.array(VERSION),

@@ -73,6 +73,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from pvcloth.scene.spec import DEFAULT_MAX_DT, DEFAULT_MIN_DT
 
 #: Safety factor on every new step (the estimate is an estimate).
@@ -173,6 +175,34 @@ class StepController:
         self.rejected += 1
         self._after_rejection = True
         return False
+
+    def get_state(self) -> np.ndarray:
+        """The memory a resumed run needs to choose the same steps, as the
+        six numbers a checkpoint keeps: the last error ratio (-1 for none),
+        whether the last step was rejected, the rejections, the last
+        accepted step and the bounds (s)."""
+        return np.array(
+            [
+                -1.0 if self.previous is None else self.previous,
+                float(self._after_rejection),
+                float(self.rejected),
+                self.taken,
+                self.min_step,
+                self.max_step,
+            ]
+        )
+
+    def set_state(self, values: np.ndarray, step: float) -> None:
+        """Continue from :meth:`get_state`'s numbers (or the first three,
+        which checkpoints held before the bounds were kept; the bounds then
+        stay as estimated now), the next step to try being ``step``."""
+        previous, after_rejection, rejected, *rest = (float(v) for v in values)
+        self.previous = None if previous < 0 else previous
+        self._after_rejection = bool(after_rejection)
+        self.rejected = int(rejected)
+        if rest:  # the bounds as they were (the stable step was estimated then)
+            self.taken, self.min_step, self.max_step = rest
+        self.step = step
 
 
 #: A step that factorises (``Integrator.steady_steps``) is lengthened only

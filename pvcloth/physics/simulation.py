@@ -626,14 +626,8 @@ class Simulation:
         sim.control.pinned = pinned
         sim.integrator.set_state(integrator_state)
         if sim.controller is not None and controller_state is not None:
-            control = sim.controller
-            previous, after_rejection, rejected, *rest = (float(v) for v in controller_state)
-            control.previous = None if previous < 0 else previous
-            control._after_rejection = bool(after_rejection)
-            control.rejected = int(rejected)
-            if rest:  # the bounds as they were (the stable step was estimated then)
-                control.taken, control.min_step, control.max_step = rest
-            control.step = sim.dt = dt
+            sim.controller.set_state(controller_state, step=dt)
+            sim.dt = dt
         sim.update_mesh()
         return sim
 
