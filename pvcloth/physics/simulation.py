@@ -19,6 +19,7 @@ from pvcloth.physics.auto import Choice, choose_integrator
 from pvcloth.physics.blas import one_blas_thread
 from pvcloth.physics.integrators import get_integrator
 from pvcloth.physics.model import build_model
+from pvcloth.physics.pipeline import Guard, Step, build_pipeline
 from pvcloth.physics.state import Control, State
 from pvcloth.scene.spec import (
     AUTO,
@@ -143,6 +144,9 @@ class Simulation:
         self.stiffness_scale = 1.0
         _check_memory(scene)
         self.model = build_model(scene, backend)
+        #: What each step goes through after the integrator (obstacles, pins,
+        #: self-collision, the divergence guard): only what the scene needs.
+        self.pipeline = build_pipeline(self.model)
         self.integrator = get_integrator(scene.solver.integrator, scene.solver.iterations)
         self.reset()
         #: Chooses every step when the scene gives ``solver.tolerance``
@@ -832,22 +836,10 @@ class Simulation:
                 new.t = state.t + dt
             else:
                 new.t = (self.steps + 1) * dt if self._uniform_clock(state) else state.t + dt
-            touched = ()
-            if model.obstacles:
-                touched = model.collide(
-                    state.x, new.x, new.v, self.control.movable_index, state.t, new.t
-                )
-        new.x[pinned] = pin_positions
-        new.v[pinned] = pin_velocity
-        if model.self_collision is not None:
-            # After the pins land: they move as they are told, the rest keeps clear.
-            model.self_collision.resolve(state.x, new.x, new.v, self.control.inv_mass, dt, touched)
-        if new.checked is not None and not model.obstacles and model.self_collision is None:
-            speed, finite = new.checked  # pinned points included (their v is set above)
-            speed = speed if finite else math.inf
-        else:
-            speed = np.abs(new.v).max(initial=0.0)
-            finite = np.isfinite(new.x).all()
+        step = Step(state, new, self.control, dt, pinned, pin_positions, pin_velocity)
+        for operator in self.pipeline:
+            operator(step)
+        speed, finite = step.reports[Guard.name]
         if not speed <= SPEED_LIMIT or not finite:
             self._spare = spare
             raise DivergenceError(self._divergence_message(speed))
