@@ -234,6 +234,31 @@ def test_back_to_the_start_while_running_never_shows_a_negative_pace(app):
     assert "chunk" not in app.status.GetInput()
 
 
+def test_every_frame_draws_one_instant_while_the_physics_steps(app):
+    """The cloth, the handles and the status of a frame come from one
+    snapshot the physics thread published (read-only copies), never from
+    the simulation it is changing meanwhile."""
+    seen = []
+    update = app.view.update
+
+    def recording(frame=None):
+        update(frame)
+        seen.append((frame, np.array(app.view.surface.points)))
+
+    app.view.update = recording
+    app.physics.paused = False
+    for _ in range(20):
+        app.frame()
+        frame, drawn = seen[-1]
+        assert frame is not None and not frame.x.flags.writeable
+        np.testing.assert_array_equal(drawn, frame.x)
+        assert f"t = {frame.t:6.2f} s" in app.status.GetInput()
+        time.sleep(1 / 60)
+    app.physics.paused = True
+    app.wait()
+    assert len({frame.t for frame, _ in seen}) > 3  # the cloth moved meanwhile
+
+
 def test_the_pace_meter_starts_again_when_the_cloth_goes_back():
     from pvcloth.visual.window_physics import RealTimeMeter
 
@@ -465,7 +490,7 @@ def test_the_same_checks_in_a_real_window_under_xvfb():
         timeout=600,
     )
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-2000:]
-    assert "20 passed, 1 skipped" in result.stdout  # all but this test itself
+    assert "21 passed, 1 skipped" in result.stdout  # all but this test itself
 
 
 def test_w_toggles_wind_and_the_slider_sets_its_speed_and_no_default_key_acts(app):

@@ -83,15 +83,18 @@ def spring_fields(model: Model, x: np.ndarray) -> dict[str, np.ndarray]:
     }
 
 
-def point_fields(sim: Simulation, names, reference=None) -> dict[str, np.ndarray]:
+def point_fields(sim: Simulation, names, reference=None, snapshot=None) -> dict[str, np.ndarray]:
     """The fields ``names`` of the simulation's current state, per point.
 
     ``velocity`` (N, 3) m/s, ``speed`` m/s, ``stretch`` (length over rest
     length), ``force`` N and ``energy`` J/m^2 (:mod:`pvcloth.physics.fields`),
     ``pinned`` (1 or 0), and ``error`` m, the distance from ``reference``
     (a :class:`~pvcloth.physics.reference.FollowingReference`) at the same time.
+    With a ``snapshot`` (:class:`~pvcloth.physics.state.Snapshot`) the
+    fields are those of that instant instead of the current state.
     """
-    state = sim.state  # one state throughout, should a physics thread replace it
+    # One state throughout, should a physics thread replace it meanwhile.
+    state = sim.state if snapshot is None else snapshot
     x = state.x.copy()
     fields: dict[str, np.ndarray] = {}
     for name in names:
@@ -105,7 +108,11 @@ def point_fields(sim: Simulation, names, reference=None) -> dict[str, np.ndarray
             if "force" not in fields:
                 fields.update(spring_fields(sim.model, x))
         elif name == "pinned":
-            fields[name] = sim.control.pinned.astype(np.uint8)
+            if snapshot is None:
+                fields[name] = sim.control.pinned.astype(np.uint8)
+            else:
+                fields[name] = np.zeros(len(x), dtype=np.uint8)
+                fields[name][snapshot.pinned] = 1
         elif name == "error":
             if reference is None:
                 raise InputError("color", "the error field needs a reference run beside the cloth")

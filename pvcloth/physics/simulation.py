@@ -20,7 +20,7 @@ from pvcloth.physics.blas import one_blas_thread
 from pvcloth.physics.integrators import get_integrator
 from pvcloth.physics.model import build_model
 from pvcloth.physics.pipeline import Guard, Step, build_pipeline
-from pvcloth.physics.state import Control, State
+from pvcloth.physics.state import Control, Snapshot, State
 from pvcloth.scene.spec import (
     AUTO,
     MAX_LENGTH,
@@ -328,6 +328,34 @@ class Simulation:
         view = self.state.v.view()
         view.flags.writeable = False
         return view
+
+    def snapshot(self) -> Snapshot:
+        """This instant, copied whole for a viewer on another thread
+        (:class:`~pvcloth.physics.state.Snapshot`).
+
+        Examples
+        --------
+        >>> import pvcloth
+        >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
+        >>> sim.advance(0.1)
+        >>> now = sim.snapshot()
+        >>> sim.advance(0.1)
+        >>> round(now.t, 3), bool((now.x != sim.positions).any()), now.pinned.tolist()
+        (0.1, True, [56, 63])
+        """
+        state = self.state  # one state throughout, should a step replace it meanwhile
+        return Snapshot(
+            x=state.x.copy(),
+            v=state.v.copy(),
+            t=state.t,
+            steps=self.steps,
+            pinned=self.control.pinned_index.copy(),
+            integrator=self.integrator.name,
+            dt=self.dt,
+            dt_source=self.dt_source,
+            adaptive=self.controller is not None,
+            wind=self.scene.wind,
+        )
 
     @property
     def resolution(self) -> tuple[int, int]:

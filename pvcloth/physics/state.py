@@ -130,3 +130,49 @@ class Control:
             mask = self._pinned.copy()
             mask[k] = False
             self.pinned = mask
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """What a viewer on another thread draws: one instant of a simulation,
+    copied whole, so no picture mixes two states (positions of one, pins or
+    time of another). Made by :meth:`Simulation.snapshot
+    <pvcloth.physics.simulation.Simulation.snapshot>`; its arrays are
+    read-only copies.
+
+    Attributes
+    ----------
+    x, v : ndarray, shape (N, 3)
+        Positions (m) and velocities (m/s).
+    t : float
+        Time (s).
+    steps : int
+        Steps taken since the start.
+    pinned : ndarray, shape (P,)
+        Indices of the pinned points.
+    integrator : str
+        The integrator's name.
+    dt : float
+        The step (s).
+    dt_source : str
+        Where the step came from (``Simulation.dt_source``).
+    adaptive : bool
+        Whether a controller chooses the steps.
+    wind : WindSpec or None
+        The wind blowing.
+    """
+
+    x: np.ndarray
+    v: np.ndarray
+    t: float
+    steps: int
+    pinned: np.ndarray
+    integrator: str
+    dt: float
+    dt_source: str
+    adaptive: bool
+    wind: object = None
+
+    def __post_init__(self):
+        for array in (self.x, self.v, self.pinned):
+            array.flags.writeable = False

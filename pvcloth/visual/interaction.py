@@ -129,6 +129,10 @@ class ClothDragStyle(vtkInteractorStyleTrackballCamera):
     on_hover : callable, optional
         Called with the index a press would grab (or ``None``) as the mouse
         moves without a grab.
+    snapshot : callable, optional
+        Gives the :class:`~pvcloth.physics.state.Snapshot` the picture shows,
+        where the points are picked (default: ``sim.snapshot``; a window
+        passes the one its physics thread published).
 
     VTK's default character handlers (``w`` wireframe, ``s`` surface, ``r``
     reset, ``e``/``q`` exit, ``f`` fly to, ``p`` pick, ``3`` stereo, ...) are
@@ -136,9 +140,12 @@ class ClothDragStyle(vtkInteractorStyleTrackballCamera):
     the wind and the wireframe at once.
     """
 
-    def __init__(self, sim, on_grab=None, on_move=None, on_release=None, on_hover=None):
+    def __init__(
+        self, sim, on_grab=None, on_move=None, on_release=None, on_hover=None, snapshot=None
+    ):
         super().__init__()
         self.sim = sim
+        self.snapshot = snapshot or sim.snapshot
         self.on_grab = on_grab or sim.pin
         self.on_move = on_move or (lambda point: sim.move_pin(self.grabbed, point))
         self.on_release = on_release or self._unpin_unless_kept
@@ -162,7 +169,7 @@ class ClothDragStyle(vtkInteractorStyleTrackballCamera):
         """Index of the cloth point nearest display ``(x, y)``, if within
         :data:`PICK_RADIUS_PX` pixels."""
         renderer = self._renderer()
-        display = world_to_display(renderer, self.sim.positions)
+        display = world_to_display(renderer, self.snapshot().x)
         distance = np.hypot(display[:, 0] - x, display[:, 1] - y)
         close = np.flatnonzero(distance <= PICK_RADIUS_PX)
         if close.size == 0:
@@ -175,9 +182,10 @@ class ClothDragStyle(vtkInteractorStyleTrackballCamera):
         if k is None:
             self.OnLeftButtonDown()  # empty space: rotate the camera as usual
             return
+        frame = self.snapshot()
         self.grabbed = k
-        self.was_pinned = bool(self.sim.control.pinned[k])
-        self._depth = world_to_display(self._renderer(), self.sim.positions[k : k + 1])[0, 2]
+        self.was_pinned = bool(np.isin(k, frame.pinned))
+        self._depth = world_to_display(self._renderer(), frame.x[k : k + 1])[0, 2]
         self.on_grab(k)
 
     def _move(self, obj, event):

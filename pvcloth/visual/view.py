@@ -32,6 +32,7 @@ from pvcloth.visual.camera import VIEWS, FramingCamera
 
 if TYPE_CHECKING:  # for annotations only
     from pvcloth.physics.simulation import Simulation
+    from pvcloth.physics.state import Snapshot
 
 
 def use_offscreen_gl_if_headless() -> None:
@@ -372,7 +373,7 @@ class ClothView:
         plotter.set_background(BACK_COLOR, top="white")
         self._light(plotter)
         self.surface = pv.PolyData(sim.state.x.copy(), topology.vtk_faces(sim.model.shape))
-        self._refresh_surface()
+        self._refresh_surface(sim.snapshot())
         self.actor = self._add_cloth(cmap)
         self.pins = None
         if show_pins:
@@ -513,28 +514,31 @@ class ClothView:
 
     # -- every frame -----------------------------------------------------------
 
-    def _refresh_surface(self) -> None:
-        x = self.sim.state.x.copy()
+    def _refresh_surface(self, frame: Snapshot) -> None:
+        x = np.array(frame.x)
         self.surface.points = x
         self.surface.point_data["Normals"] = topology.normals(x, self.sim.model.shape)
         self.surface.point_data.active_normals_name = "Normals"
         if self.field is not None:
-            values = point_fields(self.sim, [self.field], self.reference)[self.field]
+            values = point_fields(self.sim, [self.field], self.reference, frame)[self.field]
             self.surface.point_data[self.field] = values
             self.clim = self.range.update(values)
 
-    def update(self) -> None:
-        """Copy the simulation's current state into the drawn meshes (and
-        move a following camera)."""
+    def update(self, frame: Snapshot | None = None) -> None:
+        """Draw one instant, ``frame`` (default: the simulation's current
+        state), into the meshes (and move a following camera). Everything
+        drawn comes from that one snapshot: a window passes the one its
+        physics thread published, so no picture mixes two states."""
         sim = self.sim
-        self._refresh_surface()
+        frame = sim.snapshot() if frame is None else frame
+        self._refresh_surface(frame)
         if self.field is not None:
             self.actor.mapper.scalar_range = self.clim
         for obstacle, actor in zip(sim.model.obstacles, self.obstacle_actors, strict=True):
             if obstacle.path.size:
-                actor.user_matrix = obstacle_matrix(obstacle, sim.time)
+                actor.user_matrix = obstacle_matrix(obstacle, frame.t)
         if self.pins is not None:
-            pins = sim.positions[sim.pinned_indices]
+            pins = frame.x[frame.pinned]
             if len(pins) == self.pins.n_points:
                 self.pins.points = pins
             else:  # pins were added or removed: rebuild the small point cloud
@@ -545,17 +549,17 @@ class ClothView:
             camera.position, camera.focal_point, camera.up = position, focal, up
             self.plotter.renderer.ResetCameraClippingRange()
         if self.text is not None:
-            step = self._step_text(sim)
-            self.text.SetInput(f"t = {sim.time:5.2f} s   {sim.integrator.name}, {step}")
+            step = self._step_text(frame)
+            self.text.SetInput(f"t = {frame.t:5.2f} s   {frame.integrator}, {step}")
 
-    def _step_text(self, sim) -> str:
+    def _step_text(self, frame: Snapshot) -> str:
         """The step for the overlay: ``dt``, or for an adaptive run the mean
         step since the last frame and how many it took (its last step alone
         is often one shortened to land on the frame)."""
-        if sim.controller is None:
-            return f"dt = {sim.dt:.3g} s"
-        then, self._clock = self._clock, (sim.time, sim.steps)
-        if then is None or sim.steps <= then[1]:
-            return f"dt = {sim.dt:.3g} s (adaptive)"
-        steps = sim.steps - then[1]
-        return f"dt = {(sim.time - then[0]) / steps:.3g} s (adaptive, mean of {steps})"
+        if not frame.adaptive:
+            return f"dt = {frame.dt:.3g} s"
+        then, self._clock = self._clock, (frame.t, frame.steps)
+        if then is None or frame.steps <= then[1]:
+            return f"dt = {frame.dt:.3g} s (adaptive)"
+        steps = frame.steps - then[1]
+        return f"dt = {(frame.t - then[0]) / steps:.3g} s (adaptive, mean of {steps})"

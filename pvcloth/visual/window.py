@@ -189,6 +189,7 @@ class ClothApp:
             on_move=self._drag_to,
             on_release=self._release,
             on_hover=self._hover,
+            snapshot=lambda: self.physics.snapshot,  # pick what the picture shows
         )
         self.plotter.iren.style = self.style  # PyVista keeps it through show()
         self._add_handles()
@@ -354,10 +355,13 @@ class ClothApp:
         self.draw()
 
     def draw(self) -> None:
-        """Copy the latest state into the meshes and render."""
-        self.view.update()
-        self._update_handles()
-        self._update_status()
+        """Draw the instant the physics thread last published (one snapshot
+        for the cloth, the handles and the status: no frame mixes two
+        states) and render."""
+        frame = self.physics.snapshot
+        self.view.update(frame)
+        self._update_handles(frame)
+        self._update_status(frame)
         start = time.perf_counter()
         self.plotter.render()
         drawn = 1e3 * (time.perf_counter() - start)
@@ -376,23 +380,24 @@ class ClothApp:
         """Simulated seconds per wall second over the last second, measured."""
         return None if self.paused else self.physics.meter.fraction
 
-    def _update_status(self):
+    def _update_status(self, frame=None):
+        frame = self.physics.snapshot if frame is None else frame
         fps = self.fps_measured
         fraction = self.real_time_fraction
         pace = "" if fraction is None else f"   x{fraction:.2f} of real time"
         slow = "   SLOW MOTION" if fraction is not None and fraction < 0.95 else ""
         state = "PAUSED   " if self.paused else ""
-        wind = self.sim.scene.wind
+        wind = frame.wind
         blowing = "" if wind is None else f"   wind {math.hypot(*wind.velocity):.1f} m/s"
         started = self.physics.chunk_started
         running = 0.0 if started is None else time.perf_counter() - started
         busy = f"   (a step running for {running:.1f} s)" if running > 2.0 / self.fps else ""
         text = (
-            f"{state}t = {self.sim.time:6.2f} s{pace}{slow}{busy}\n"
+            f"{state}t = {frame.t:6.2f} s{pace}{slow}{busy}\n"
             f"{'' if fps is None else f'{fps:4.1f} fps   '}each frame: physics "
             f"{self.physics.chunk_ms:.1f} ms, drawing {self.render_ms:.1f} ms\n"
-            f"{self.sim.integrator.name}, dt {self.sim.dt:.3g} s "
-            f"({STEP_SOURCES[self.sim.dt_source]}){blowing}"
+            f"{frame.integrator}, dt {frame.dt:.3g} s "
+            f"({STEP_SOURCES[frame.dt_source]}){blowing}"
         )
         if self.message:
             # Wrapped: a refusal names a step and what to do, longer than a
@@ -400,24 +405,25 @@ class ClothApp:
             text += "\n" + textwrap.fill(self.message, STATUS_COLUMNS)
         self.status.SetInput(text)
 
-    def _update_handles(self):
+    def _update_handles(self, frame):
         k = self.style.grabbed
         drag = self.physics.drag
         grabbing = k is not None and drag is not None
         self.handle_actor.visibility = grabbing
         self.leash_actor.visibility = grabbing
         if grabbing:
-            point = np.array(self.sim.state.x[k])
+            point = np.array(frame.x[k])
             self.handle.points = point[None]
             self.leash.points = np.array([point, drag[1].cursor])
         self.hover_actor.visibility = self._hovered is not None and not grabbing
         if self.hover_actor.visibility:
-            self.hover.points = np.array(self.sim.state.x[self._hovered])[None]
+            self.hover.points = np.array(frame.x[self._hovered])[None]
 
     # -- the mouse -----------------------------------------------------------
 
     def _grab(self, k: int) -> None:
-        path = DragPath(self.sim.state.x[k], time.perf_counter(), self.sim.time)
+        frame = self.physics.snapshot  # the instant the press was aimed at
+        path = DragPath(frame.x[k], time.perf_counter(), frame.t)
         self.request(self.sim.pin, k)
         self.physics.drag = (k, path)
 
@@ -471,7 +477,7 @@ class ClothApp:
 
     def toggle_wind(self):
         """Turn the wind off, or back on at the slider's speed."""
-        blowing = self.sim.scene.wind is not None
+        blowing = self.physics.snapshot.wind is not None
         self._show_wind_slider(not blowing)
         self.request(self.sim.set_wind, None if blowing else self._wind)
 
@@ -483,16 +489,17 @@ class ClothApp:
         measuring-only ones (``backward_euler``) are left out, and with a
         tolerance those that cannot measure their error (every key press
         would be refused)."""
-        adaptive = self.sim.scene.solver.tolerance is not None
-        names = sorted(
-            name
-            for name, cls in INTEGRATORS.items()
-            if cls.interactive and (cls.embedded or not adaptive)
-        )
-        current = self.sim.integrator.name
-        following = names[(names.index(current) + 1) % len(names)] if current in names else names[0]
 
-        def switch():
+        def switch():  # on the physics thread, which owns the simulation
+            adaptive = self.sim.scene.solver.tolerance is not None
+            names = sorted(
+                name
+                for name, cls in INTEGRATORS.items()
+                if cls.interactive and (cls.embedded or not adaptive)
+            )
+            current = self.sim.integrator.name
+            at = names.index(current) + 1 if current in names else 0
+            following = names[at % len(names)]
             self.sim.update({"solver.integrator": following, "solver.dt": None})
             self.physics.forget_pace()
 
@@ -548,8 +555,13 @@ class ClothApp:
         """Keep the wind's direction, change its speed (applied now if it blows)."""
         velocity = tuple(value * c for c in self._wind_direction)
         self._wind = dataclasses.replace(self._wind, velocity=velocity)
-        if self.sim.scene.wind is not None:
-            self.request(self.sim.set_wind, self._wind)
+        wind = self._wind
+
+        def blow():  # on the physics thread: applied only while the wind blows
+            if self.sim.scene.wind is not None:
+                self.sim.set_wind(wind)
+
+        self.request(blow)
 
     def tick(self, *_):
         """The event loop's timer, every :data:`TICK_MS`: a frame when one is

@@ -114,6 +114,11 @@ class PhysicsThread:
         Wall time of the last chunk (ms).
     diverged : str or None
         Message of the last divergence (the thread pauses on one).
+    snapshot : Snapshot
+        The instant the window draws (:meth:`Simulation.snapshot
+        <pvcloth.physics.simulation.Simulation.snapshot>`), published by this
+        thread after every chunk and every request, before the request's
+        caller hears that it ran; replaced whole, never changed.
     """
 
     def __init__(self, sim, chunk_seconds: float):
@@ -127,6 +132,7 @@ class PhysicsThread:
         self.chunk_started: float | None = None
         self.diverged: str | None = None
         self.meter = RealTimeMeter()
+        self.snapshot = sim.snapshot()
         self._kept = collections.deque(maxlen=KEPT_CHUNKS)
         self._requests: queue.Queue = queue.Queue()
         self._owed = 0.0
@@ -205,12 +211,18 @@ class PhysicsThread:
                 continue
             future, change, args = item
             try:
-                future.set_result(change(*args))
+                result = change(*args)
             except DivergenceError as error:
                 self._on_divergence(error)
+                self.snapshot = self.sim.snapshot()
                 future.set_exception(error)
             except Exception as error:  # shown by the window, never lost
+                self.snapshot = self.sim.snapshot()
                 future.set_exception(error)
+            else:
+                # Published before the caller hears: what it draws next shows the change.
+                self.snapshot = self.sim.snapshot()
+                future.set_result(result)
 
     def steps_for(self, seconds: float) -> int:
         """Substeps of ``seconds`` that fit :attr:`chunk_seconds` of wall
@@ -238,6 +250,7 @@ class PhysicsThread:
             return
         finally:
             self.chunk_started = None
+            self.snapshot = sim.snapshot()
         spent = time.perf_counter() - start
         self.chunk_ms = 1e3 * spent
         cost = spent / steps
