@@ -34,10 +34,12 @@ _LAZY = {
     },
     **{name: ("physics.model", name) for name in ("Model", "build_model")},
     **{
-        name: ("scene.spec", name)
-        for name in ("CameraSpec", "ClothSpec", "ObstacleSpec", "PinSpec", "Scene", "SolverSpec")
-        + ("SelfCollisionSpec", "SpringSpec", "SpringsSpec", "WindSpec", "load_scene")
+        name: ("scene.parts", name)
+        for name in ("CameraSpec", "ClothSpec", "ObstacleSpec", "PinSpec", "SolverSpec")
+        + ("SelfCollisionSpec", "SpringSpec", "SpringsSpec", "WindSpec")
     },
+    "Scene": ("scene.spec", "Scene"),
+    "load_scene": ("scene.files", "load_scene"),
     "Simulation": ("physics.simulation", "Simulation"),
     **{name: ("physics.state", name) for name in ("Control", "State")},
     "render": ("visual.movie", "render"),

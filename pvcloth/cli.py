@@ -8,8 +8,9 @@ import time
 from pathlib import Path
 
 from pvcloth.errors import InputError, PvclothError
+from pvcloth.scene.files import load_scene
 from pvcloth.scene.overrides import parse_assignment, parse_value
-from pvcloth.scene.spec import MEASURING_INTEGRATORS, STABILITY_POLICIES, load_scene
+from pvcloth.scene.parts import MEASURING_INTEGRATORS, STABILITY_POLICIES
 from pvcloth.scene.validation import real
 from pvcloth.signals import Terminated, check, deferred, handled
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pvcloth
 from pvcloth.physics.integrators import INTEGRATORS
-from pvcloth.scene.spec import INTEGRATOR_NAMES, MEASURING_INTEGRATORS
+from pvcloth.scene.parts import INTEGRATOR_NAMES, MEASURING_INTEGRATORS
 
 PACKAGE = Path(pvcloth.__file__).parent
 #: What the physics and scene layers must never import.
@@ -40,7 +40,8 @@ import importlib, json, sys
 for name in {modules!r}:
     importlib.import_module(name)
 from pvcloth.physics.simulation import Simulation
-from pvcloth.scene.spec import ClothSpec, ObstacleSpec, Scene, WindSpec
+from pvcloth.scene.parts import ClothSpec, ObstacleSpec, WindSpec
+from pvcloth.scene.spec import Scene
 from pvcloth.physics.integrators import INTEGRATORS
 scene = Scene(
     cloth=ClothSpec(resolution=(6, 6)),

@@ -30,7 +30,8 @@ from pvcloth.physics.simulation import (
     Simulation,
 )
 from pvcloth.physics.state import State
-from pvcloth.scene.spec import MAX_LENGTH, Scene
+from pvcloth.scene.parts import MAX_LENGTH
+from pvcloth.scene.spec import Scene
 
 TAG = "pvcloth-checkpoint"
 VERSION = 2

@@ -75,7 +75,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pvcloth.scene.spec import DEFAULT_MAX_DT, DEFAULT_MIN_DT
+from pvcloth.scene.parts import DEFAULT_MAX_DT, DEFAULT_MIN_DT
 
 #: Safety factor on every new step (the estimate is an estimate).
 SAFETY = 0.9

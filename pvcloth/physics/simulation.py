@@ -21,15 +21,9 @@ from pvcloth.physics.integrators import get_integrator
 from pvcloth.physics.model import build_model
 from pvcloth.physics.pipeline import Guard, Step, build_pipeline
 from pvcloth.physics.state import Control, Snapshot, State
-from pvcloth.scene.spec import (
-    AUTO,
-    MAX_LENGTH,
-    STABILITY_POLICIES,
-    Scene,
-    WindSpec,
-    html_table,
-    load_scene,
-)
+from pvcloth.scene.files import load_scene
+from pvcloth.scene.parts import AUTO, MAX_LENGTH, STABILITY_POLICIES, WindSpec
+from pvcloth.scene.spec import Scene, html_table
 from pvcloth.scene.validation import choice, integer, real
 
 #: No cloth point moves faster than this (m/s) unless the solver blew up.

@@ -26,7 +26,8 @@ import numpy as np
 
 from pvcloth.errors import SceneError
 from pvcloth.physics.adaptive import MAX_STEP, MIN_STEP, UNIT_TIME, StepController
-from pvcloth.scene.spec import MEASURING_INTEGRATORS, Scene
+from pvcloth.scene.parts import MEASURING_INTEGRATORS
+from pvcloth.scene.spec import Scene
 
 #: A step counts as stable up to this share of the estimated limit. The
 #: estimate is exact only for the linearised cloth at rest; far from rest,

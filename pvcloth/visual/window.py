@@ -32,7 +32,7 @@ from pvcloth.errors import DisplayError, DivergenceError, SceneError
 from pvcloth.io.files import atomic_write
 from pvcloth.physics.integrators import INTEGRATORS
 from pvcloth.physics.step_policy import STEP_SOURCES
-from pvcloth.scene.spec import WindSpec
+from pvcloth.scene.parts import WindSpec
 from pvcloth.visual.interaction import ClothDragStyle, DragPath
 from pvcloth.visual.window_physics import PhysicsThread
 

@@ -10,7 +10,7 @@ import scipy.sparse as sp
 
 from pvcloth.physics.stability import stiffest_mode
 from pvcloth.physics.state import Control, State
-from pvcloth.scene.spec import INTEGRATOR_NAMES
+from pvcloth.scene.parts import INTEGRATOR_NAMES
 
 if TYPE_CHECKING:  # for annotations only: the model module imports no integrator
     from pvcloth.physics.model import Model
