@@ -184,7 +184,7 @@ def test_a_zone_its_own_pairs_meet_twice_in_one_pass_moves_and_is_not_held():
     v1 = (x1 - x0) / 0.1
     rows = np.array([[0, 3, 0], [0, 3, 0]])
     inv_mass = np.ones(4)
-    zones = self_collision._zones(x0, x1, v1)
+    zones = self_collision.new_zones(x0, x1, v1)
     everywhere = np.full((4, 3), -10.0), np.full((4, 3), 10.0)  # boxes: no list is needed
     zoned, unresolved, done = self_collision.impact_zones(
         rows, np.arange(2), self_collision.pair_distances(rows, triangles, edges, x0), triangles,
