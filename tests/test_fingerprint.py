@@ -1,6 +1,7 @@
-"""Fingerprints: every bundled scene with every integrator, at 8x8 points,
-lands after a few steps where it landed when the fingerprints were recorded
-(``tests/data/fingerprints.npz``). A change meant to change nothing for a
+"""Fingerprints: every bundled scene with every integrator, at 8x8 points
+(and the hanging cloth with a tolerance and with substeps, which no bundled
+scene uses), lands after a few steps where it landed when the fingerprints
+were recorded (``tests/data/fingerprints.npz``). A change meant to change nothing for a
 user (a refactor) must keep them; a change of the physics re-records them
 and says why in its commit::
 
@@ -31,7 +32,7 @@ from pvcloth.physics.integrators import INTEGRATORS
 HERE = Path(__file__).resolve().parent
 RECORD = HERE / "data" / "fingerprints.npz"
 SCENES = sorted((HERE.parent / "data" / "scenes").glob("*.toml"))
-#: Points a side and steps per run: small enough that all 88 runs take a
+#: Points a side and steps per run: small enough that all 104 runs take a
 #: few seconds, and small grids step on the serial kernels (threads would
 #: make the sums' order, and so the last bits, depend on the thread count).
 SIZE, STEPS = 8, 12
@@ -52,13 +53,24 @@ def machine() -> str:
     )
 
 
-def fingerprint(path: Path, integrator: str) -> np.ndarray | str:
+#: Settings the bundled scenes do not use, run on the hanging cloth so that
+#: the adaptive controller and the substep policy are fingerprinted too.
+VARIANTS = {
+    "tolerance": {"solver.tolerance": 1e-3, "solver.dt": None},
+    "substeps": {"solver.dt": 0.01, "solver.stability": "substep"},
+}
+
+
+def fingerprint(path: Path, integrator: str, variant: str = "") -> np.ndarray | str:
     """Positions (m), shape (SIZE * SIZE, 3), after STEPS steps of the
-    scene at SIZE x SIZE points with the integrator at its automatic step;
-    or the message of the error that refused it."""
+    scene at SIZE x SIZE points with the integrator at the scene's step
+    (its ``solver.dt``, or the automatic one where it gives none); or the
+    message of the error that refused it."""
     scene = pvcloth.load_scene(path)
     try:
-        scene = scene.with_overrides({"cloth.resolution": [SIZE, SIZE]})
+        scene = scene.with_overrides(
+            {"cloth.resolution": [SIZE, SIZE], **VARIANTS.get(variant, {})}
+        )
         sim = Simulation(scene, integrator=integrator)
         for _ in range(STEPS):
             sim.step()
@@ -67,19 +79,22 @@ def fingerprint(path: Path, integrator: str) -> np.ndarray | str:
     return sim.positions.copy()
 
 
-CASES = [(p, name) for p in SCENES for name in sorted(INTEGRATORS)]
+HANGING = HERE.parent / "data" / "scenes" / "hanging.toml"
+CASES = [(p, name, "") for p in SCENES for name in sorted(INTEGRATORS)] + [
+    (HANGING, name, variant) for variant in VARIANTS for name in sorted(INTEGRATORS)
+]
 
 
-def _key(path: Path, integrator: str) -> str:
-    return f"{path.stem}/{integrator}"
+def _key(path: Path, integrator: str, variant: str = "") -> str:
+    return f"{path.stem}{'+' + variant if variant else ''}/{integrator}"
 
 
 def record() -> None:
     kept = {"machine": np.array(machine())}
-    for path, integrator in CASES:
-        found = fingerprint(path, integrator)
-        kept[_key(path, integrator)] = np.array(found)
-        print(_key(path, integrator), "refused" if isinstance(found, str) else "ok")
+    for case in CASES:
+        found = fingerprint(*case)
+        kept[_key(*case)] = np.array(found)
+        print(_key(*case), "refused" if isinstance(found, str) else "ok")
     partial = RECORD.with_suffix(".partial.npz")
     RECORD.parent.mkdir(exist_ok=True)
     np.savez_compressed(partial, **kept)
@@ -97,10 +112,10 @@ def test_every_bundled_scene_and_integrator_has_a_fingerprint(recorded):
     assert sorted(k for k in recorded if k != "machine") == sorted(_key(*c) for c in CASES)
 
 
-@pytest.mark.parametrize("path, integrator", CASES, ids=[_key(*c) for c in CASES])
-def test_the_steps_land_where_they_did_when_recorded(recorded, path, integrator):
-    was = recorded[_key(path, integrator)]
-    now = fingerprint(path, integrator)
+@pytest.mark.parametrize("path, integrator, variant", CASES, ids=[_key(*c) for c in CASES])
+def test_the_steps_land_where_they_did_when_recorded(recorded, path, integrator, variant):
+    was = recorded[_key(path, integrator, variant)]
+    now = fingerprint(path, integrator, variant)
     if was.dtype.kind == "U":  # refused then: refused now, with the same words
         assert now == str(was)
         return

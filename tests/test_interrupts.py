@@ -140,3 +140,42 @@ def test_ctrl_c_stops_a_sweep_quietly_and_the_rerun_finishes_it(tmp_path):
     rerun = subprocess.run(command, capture_output=True, text=True, timeout=300)
     assert rerun.returncode == 0, rerun.stderr
     assert "wrote" in rerun.stdout and "(24 runs)" in rerun.stdout
+
+
+def test_a_signal_python_cannot_raise_is_kept_quietly_for_check(capsys):
+    # As when SIGTERM lands in an import lock's weakref callback: Python hands
+    # the exception to sys.unraisablehook instead of raising it.
+    import sys
+    import types
+
+    from pvcloth import signals
+
+    with signals.handled():
+        try:
+            signals._handler(signal.SIGTERM, None)
+        except signals.Terminated as error:
+            sys.unraisablehook(
+                types.SimpleNamespace(
+                    exc_type=type(error), exc_value=error, exc_traceback=None,
+                    err_msg=None, object=None,
+                )
+            )  # fmt: skip
+        assert capsys.readouterr().err == ""
+        with pytest.raises(signals.Terminated):
+            signals.check()
+
+
+def test_a_signal_during_an_import_is_held_until_the_import_ends(tmp_path, monkeypatch):
+    # As when SIGTERM lands inside a compiled extension's set-up (cholespy's
+    # nanobind enums): raised there, it aborted the process with a C++ error.
+    from pvcloth import signals
+
+    (tmp_path / "signalled_module.py").write_text(
+        "import signal\nsignal.raise_signal(signal.SIGTERM)\nFINISHED = True\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with signals.handled():
+        with pytest.raises(signals.Terminated):
+            import signalled_module  # noqa: F401
+    assert sys.modules["signalled_module"].FINISHED  # the module's body ran to its end
+    del sys.modules["signalled_module"]

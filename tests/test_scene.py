@@ -158,6 +158,12 @@ def test_a_scene_file_that_sets_nothing_is_refused(tmp_path, text):
             "obstacles[0].centre",
             4,
         ),
+        (  # a list over several lines: its rows are not table headers
+            '[cloth]\nsize = [\n  1.0,\n  1.0]\n[[obstacles]]\ntype = "sphere"\npath = [\n'
+            "  [0, 0, 0, 1],\n  [1, 0, 0, 1]]\nradius = -1\n",
+            "obstacles[0].radius",
+            10,
+        ),
         (  # two obstacles set a radius: the line is ambiguous, the file is named
             '[[obstacles]]\ntype = "sphere"\nradius = 1\n[[obstacles]]\ntype = "sphere"\n'
             "radius = -1\n",

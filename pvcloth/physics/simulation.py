@@ -141,7 +141,7 @@ class Simulation:
         #: What each step goes through after the integrator (obstacles, pins,
         #: self-collision, the divergence guard): only what the scene needs.
         self.pipeline = build_pipeline(self.model)
-        self.integrator = get_integrator(scene.solver.integrator, scene.solver.iterations)
+        self.integrator = get_integrator(scene.solver.method, scene.solver.iterations)
         self.reset()
         #: Chooses every step when the scene gives ``solver.tolerance``
         #: (:mod:`pvcloth.physics.adaptive`); ``None`` for fixed steps.
@@ -538,8 +538,8 @@ class Simulation:
         before = (self.scene, self.integrator, self.dt)
         self.model.apply(scene)
         solver, was = scene.solver, self.scene.solver
-        if (solver.integrator, solver.iterations) != (self.integrator.name, was.iterations):
-            self.integrator = get_integrator(solver.integrator, solver.iterations)
+        if (solver.method, solver.iterations) != (self.integrator.name, was.iterations):
+            self.integrator = get_integrator(solver.method, solver.iterations)
         # The stable step depends on the springs, air damping and the
         # integrator, not on wind; gravity sets the contact step.
         step_depends = ("springs", "air_damping", "solver")
@@ -788,7 +788,7 @@ class Simulation:
         """``scene`` with ``solver.integrator = "auto"`` replaced by the
         integrator a probe chose (kept in :attr:`choice`), so what runs, and
         what a checkpoint saves, names it; other scenes as they are."""
-        if scene.solver.integrator != AUTO:
+        if scene.solver.method != AUTO:
             return scene
         self.choice = choose_integrator(scene, type(self))
         return scene.with_overrides({"solver.integrator": self.choice.name})

@@ -85,7 +85,9 @@ def _line_setting(text: str, key: str) -> int | None:
     table, lines = "", []
     for number, line in enumerate(text.splitlines(), 1):
         code = line.split("#", 1)[0].strip()  # a '#' inside a string ends the search early
-        header = re.fullmatch(r"\[\[?([^\[\]]+)\]\]?", code)
+        # A table name starts with a letter, _ or a quote: a row of a list
+        # written over several lines ("[1, 0, 0, 1]") is not a header.
+        header = re.fullmatch(r"\[\[?\s*([A-Za-z_\"][\w.\-\" ]*)\]\]?", code)
         if header:
             table = header.group(1).replace('"', "").replace(" ", "")
             lines += [number] if table == wanted else []

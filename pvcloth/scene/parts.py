@@ -273,8 +273,10 @@ class SolverSpec:
     6
     >>> SolverSpec("auto", tolerance=1e-3, max_dt=0.01).max_dt
     0.01
-    >>> SolverSpec(tolerance=1e-3).integrator  # a tolerance alone lets a probe choose
+    >>> SolverSpec(tolerance=1e-3).method  # a tolerance alone lets a probe choose
     'auto'
+    >>> SolverSpec().method
+    'symplectic_euler'
     """
 
     integrator: str | None = None
@@ -289,8 +291,6 @@ class SolverSpec:
         _set(self, "stability", choice("stability", self.stability, STABILITY_POLICIES))
         if self.tolerance is not None:
             _set(self, "tolerance", real("tolerance", self.tolerance, minimum=1e-12, maximum=1.0))
-        if self.integrator is None:
-            _set(self, "integrator", AUTO if self.tolerance is not None else "symplectic_euler")
         for key in ("min_dt", "max_dt"):
             value = getattr(self, key)
             if value is None:
@@ -315,9 +315,23 @@ class SolverSpec:
             _set(
                 self, "iterations", integer("iterations", self.iterations, minimum=1, maximum=10000)
             )
-        _set(self, "integrator", choice("integrator", self.integrator, (*INTEGRATOR_NAMES, AUTO)))
+        if self.integrator is not None:
+            _set(
+                self,
+                "integrator",
+                choice("integrator", self.integrator, (*INTEGRATOR_NAMES, AUTO)),
+            )
         if self.dt is not None:
             _set(self, "dt", real("dt", self.dt, minimum=0.0, exclusive=True, maximum=10.0))
+
+    @property
+    def method(self) -> str:
+        """The integrator that runs: the one named, else ``"auto"`` with a
+        tolerance and ``"symplectic_euler"`` without (so a tolerance given
+        later, by ``--tolerance`` or an override, also lets a probe choose)."""
+        if self.integrator is not None:
+            return self.integrator
+        return AUTO if self.tolerance is not None else "symplectic_euler"
 
 
 @dataclass(frozen=True)

@@ -293,7 +293,7 @@ class Scene:
             ("pins", "; ".join(pins) or "none"),
             (
                 "solver",
-                f"{solver.integrator}, dt {step}, stability {solver.stability}"
+                f"{solver.method}, dt {step}, stability {solver.stability}"
                 + (f", {solver.iterations} iterations" if solver.iterations else ""),
             ),
             ("gravity", f"{_vec(self.gravity)} m/s^2, air damping {self.air_damping:g} 1/s"),

@@ -188,7 +188,7 @@ def run_unit(unit: Unit, reference: dict, duration: float) -> dict:
     return {
         "id": unit.id,
         "settings": unit.label,
-        "integrator": scene.solver.integrator,
+        "integrator": scene.solver.method,
         "dt": dt,
         "stable": run.stable,
         "error": run.message,

@@ -394,8 +394,8 @@ class ClothApp:
         busy = f"   (a step running for {running:.1f} s)" if running > 2.0 / self.fps else ""
         text = (
             f"{state}t = {frame.t:6.2f} s{pace}{slow}{busy}\n"
-            f"{'' if fps is None else f'{fps:4.1f} fps   '}each frame: physics "
-            f"{self.physics.chunk_ms:.1f} ms, drawing {self.render_ms:.1f} ms\n"
+            f"{'' if fps is None else f'{fps:4.1f} frames a second   '}drawing a frame "
+            f"{self.render_ms:.1f} ms, the last steps {self.physics.chunk_ms:.1f} ms\n"
             f"{frame.integrator}, dt {frame.dt:.3g} s "
             f"({STEP_SOURCES[frame.dt_source]}){blowing}"
         )

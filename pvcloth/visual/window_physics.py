@@ -4,8 +4,9 @@ time, and carries out the window's requests between chunks of steps.
 Why a thread: the window must keep drawing and following the mouse while
 the cloth computes, and some work takes longer than a frame (an implicit
 step at 64x64 is a quarter second, a stable-step estimate up to 0.2 s). The
-main thread, which VTK needs, only reads the current state (a state is
-never written once current: see ``Simulation._take_spare``).
+main thread, which VTK needs, draws only the :class:`~pvcloth.physics.state.Snapshot`
+this thread publishes after every chunk and every request (``snapshot``):
+copies, replaced whole, so no frame mixes two states.
 
 Why a loop rather than one chunk per timer tick: a chunk that finished
 between two ticks would leave the physics idle until the next one; the loop

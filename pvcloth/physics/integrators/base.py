@@ -22,10 +22,10 @@ INTEGRATORS: dict[str, type[Integrator]] = {}
 def register(cls: type[Integrator]) -> type[Integrator]:
     """Class decorator that makes an integrator available by its ``name``,
     which must be one of the names scenes accept
-    (:data:`pvcloth.scene.spec.INTEGRATOR_NAMES`)."""
+    (:data:`pvcloth.scene.parts.INTEGRATOR_NAMES`)."""
     if cls.name not in INTEGRATOR_NAMES:
         raise ValueError(
-            f"integrator {cls.name!r} is not in pvcloth.scene.spec.INTEGRATOR_NAMES; "
+            f"integrator {cls.name!r} is not in pvcloth.scene.parts.INTEGRATOR_NAMES; "
             f"add it there so scenes can ask for it"
         )
     INTEGRATORS[cls.name] = cls
