@@ -15,7 +15,7 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
 if not os.environ.get("DISPLAY"):
     # Plotters the tests and docstring examples make themselves get VTK's
-    # EGL window, as pvcloth's own do (pvcloth.visual.view.use_offscreen_gl_if_headless).
+    # EGL window, as pvcloth's own do (pvcloth.visual.gl.use_offscreen_gl_if_headless).
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
 import numpy as np
@@ -75,7 +75,7 @@ def free_cloth(n=5, **kwargs) -> pvcloth.Simulation:
 
 
 _PROBE = (
-    "import pvcloth.visual.view as view, pyvista as pv; view.use_offscreen_gl_if_headless();"
+    "import pvcloth.visual.gl as gl, pyvista as pv; gl.use_offscreen_gl_if_headless();"
     "pl = pv.Plotter(off_screen=True, window_size=(64, 64));"
     "pl.add_mesh(pv.Sphere()); assert pl.screenshot(return_img=True).shape == (64, 64, 3)"
 )

@@ -116,8 +116,7 @@ def main() -> None:
             on = Simulation(scene)
             off = Simulation(scene.replace(self_collision=None))
             for sim in (on, off):
-                sim.state.x[:] = start.state.x
-                sim.state.v[:] = start.state.v
+                sim.set_state(start.state.x, start.state.v)
             timed(on, off, 2)  # compile, warm caches
             energy = on.energy()["kinetic"]
             t_on, t_off, candidates, zoned = timed(on, off, args.steps)

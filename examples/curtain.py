@@ -26,7 +26,9 @@ sim = pvcloth.Simulation(scene)
 # a push out of the plane on the lower half, so the curtain swings
 nx, ny = sim.resolution
 lower = np.arange(nx * ny) < nx * ny // 2
-sim.state.v[lower, 1] = 1.5
+push = sim.velocities.copy()
+push[lower, 1] = 1.5
+sim.set_state(velocities=push)
 
 output = sys.argv[1] if len(sys.argv) > 1 else "curtain.png"
 pvcloth.render(sim, output, frames=20, fps=30, size=(480, 480))

@@ -40,7 +40,7 @@ _LAZY = {
     },
     "Scene": ("scene.spec", "Scene"),
     "load_scene": ("scene.files", "load_scene"),
-    "Simulation": ("physics.simulation", "Simulation"),
+    "Simulation": ("simulation", "Simulation"),
     **{name: ("physics.state", name) for name in ("Control", "State")},
     "render": ("visual.movie", "render"),
     "compare": ("visual.compare", "compare"),

@@ -128,9 +128,9 @@ def cmd_simulate(args) -> None:
 
 
 def cmd_compare(args) -> None:
+    from pvcloth.visual.colors import check_field
     from pvcloth.visual.compare import compare, parse_list, parse_steps
     from pvcloth.visual.movie import parse_size
-    from pvcloth.visual.view import check_field
 
     check_field(args.color)
     integrators = parse_list("integrators", args.integrators)
@@ -153,8 +153,8 @@ def cmd_compare(args) -> None:
 
 
 def cmd_render(args) -> None:
+    from pvcloth.visual.colors import check_cmap, check_field, parse_clim
     from pvcloth.visual.movie import parse_size, render
-    from pvcloth.visual.view import check_cmap, check_field, parse_clim
 
     check_field(args.color)
     check_cmap(args.cmap)

@@ -240,7 +240,7 @@ def test_the_implicit_estimate_is_the_step_s_own_error(name):
     exact = Simulation(hanging(8), integrator="rk4", dt=h / 1000, stability="ignore")
     step = pvcloth.INTEGRATORS[name]()
     after = step.step(start.model, start.state, start.control, h)
-    exact.state = type(start.state)(start.state.x.copy(), start.state.v.copy(), start.state.t)
+    exact.set_state(start.positions, start.velocities, start.time)
     exact.advance(h)
     true_error = largest_distance(after.x, exact.state.x)
     assert 0.7 * true_error < step.error < 1.3 * true_error, (step.error, true_error)

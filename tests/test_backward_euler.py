@@ -28,7 +28,9 @@ def test_one_step_is_the_root_of_the_implicit_equation():
         orientation="horizontal",
     )
     sim = Simulation(scene, integrator="backward_euler", dt=DT)
-    sim.state.v[3] = (0.3, -0.2, 0.5)
+    push = sim.velocities.copy()
+    push[3] = (0.3, -0.2, 0.5)
+    sim.set_state(velocities=push)
     x0 = sim.positions.copy()
     v0 = sim.velocities[3].copy()
     mass = sim.model.mass[3]

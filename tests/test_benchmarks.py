@@ -24,6 +24,11 @@ RUNS = {
     "adaptive.py": ([], "adaptive.md"),
     "view_cost.py": ([], "view_cost.md"),
     "blas_threads.py": ([], "blas_threads.md"),
+    # the copy (no .git) against itself, in place of two commits
+    "before_after.py": (
+        [".", ".", "--grid", "8", "--rounds", "1", "--calls", "1"],
+        "before_after.md",
+    ),
     "cpu_speed.py": (["--sizes", "8", "--rounds", "1"], "cpu_speed.md"),
     "environment_cost.py": ([], "environment_cost.md"),
     "fabric_speed.py": ([], "fabric_speed.md"),

@@ -111,6 +111,18 @@ def test_files_get_the_umask_mode_and_formats_keep_their_own_folders(tmp_path):
             assert file.stat().st_mode & 0o777 == 0o644, file
 
 
+def test_a_shorter_re_export_leaves_none_of_the_old_frames(tmp_path):
+    import pyvista as pv
+
+    for frames in (4, 2):
+        export(cloth(), tmp_path / "cloth.pvd", frames=frames, progress=False)
+        folder = export(cloth(), tmp_path / "cloth.obj", frames=frames, progress=False)
+    assert len(list(folder.iterdir())) == 2
+    assert len(list((tmp_path / "cloth_vtu").iterdir())) == 2
+    assert len(pv.get_reader(tmp_path / "cloth.pvd").time_values) == 2
+    assert not list(tmp_path.glob(".*"))  # no hidden temporary or old folder left
+
+
 def test_no_export_changes_the_working_directory(tmp_path, monkeypatch):
     import os
 

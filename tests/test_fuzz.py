@@ -6,7 +6,7 @@ traceback, a hang or a silent NaN.
 
 Seeded and bounded: ``PVCLOTH_FUZZ_EXAMPLES`` sets the number of cases per
 test (default 150 here; ``python benchmarks/fuzz.py`` runs 10,000 or more and
-records the count). The step bound :data:`pvcloth.physics.simulation.MAX_STEPS` is
+records the count). The step bound :data:`pvcloth.physics.clocks.MAX_STEPS` is
 lowered to 20,000 for the run, so a case that would take too long is refused
 by the same check a user meets, just sooner.
 """
@@ -22,7 +22,7 @@ from hypothesis import HealthCheck, given, seed, settings
 from hypothesis import strategies as st
 
 import pvcloth
-import pvcloth.physics.simulation
+import pvcloth.physics.clocks
 from pvcloth.cli import main
 
 EXAMPLES = int(os.environ.get("PVCLOTH_FUZZ_EXAMPLES", "150"))
@@ -36,7 +36,7 @@ FUZZ = settings(
 
 @pytest.fixture(autouse=True)
 def _few_steps(monkeypatch):
-    monkeypatch.setattr(pvcloth.physics.simulation, "MAX_STEPS", 20_000)
+    monkeypatch.setattr(pvcloth.physics.clocks, "MAX_STEPS", 20_000)
 
 
 # -- values a hostile user writes -----------------------------------------------

@@ -93,7 +93,7 @@ def test_control_derived_arrays_cannot_go_stale():
     mask[7] = True
     control.pinned = mask
     assert control.inv_mass[7] == 0.0 and 7 in control.pinned_index
-    assert 7 not in control.movable_index and control.revision == revision + 1
+    assert 7 not in control.movable_index and control.revision > revision
     sim.unpin(7)
     assert control.inv_mass[7] == pytest.approx(1.0 / sim.model.mass[7])
     with pytest.raises(InputError, match="shape"):

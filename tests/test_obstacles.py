@@ -48,7 +48,9 @@ def run_checking_every_step(sim, seconds, speed):
     that no point is closer than the thickness to any obstacle's surface and
     that no point's straight path over the step went through an obstacle's
     core (sampled finely, with the obstacles' own signed distance)."""
-    sim.state.v[:, 2] = -speed
+    v = sim.velocities.copy()
+    v[:, 2] = -speed
+    sim.set_state(velocities=v)
     steps = round(seconds / sim.dt)
     closest = np.inf
     samples = np.linspace(0.0, 1.0, 129)[:, None, None]
@@ -96,8 +98,10 @@ def test_the_path_test_is_what_stops_tunnelling():
     """Checking only where a point ends would let this one through: in one
     step it jumps from 2 cm above a 4 mm slab to 2 cm below it."""
     sim = falling_cloth(4, [ObstacleSpec("box", size=(2, 2, 0.004), thickness=0.0)])
-    sim.state.x[:, 2] = 0.02
-    sim.state.v[:] = (0.0, 0.0, -0.04 / sim.dt)  # 4 cm per step
+    x = sim.positions.copy()
+    x[:, 2] = 0.02
+    v = np.broadcast_to((0.0, 0.0, -0.04 / sim.dt), x.shape)  # 4 cm per step
+    sim.set_state(x, v)
     sim.step()
     assert (sim.positions[:, 2] >= 0.002 - 1e-12).all()
 
@@ -121,7 +125,9 @@ def test_a_moving_sphere_pushes_through_a_resting_cloth_without_entering_it():
 def test_friction_on_a_horizontal_box_top_holds_the_cloth_still():
     box = ObstacleSpec("box", center=(0, 0, -0.25), size=(2, 2, 0.5), thickness=0.0, friction=0.3)
     sim = falling_cloth(10, [box])
-    sim.state.x[:, 2] = 0.0
+    x = sim.positions.copy()
+    x[:, 2] = 0.0
+    sim.set_state(positions=x)
     start = sim.positions.copy()
     sim.advance(0.5)
     np.testing.assert_allclose(sim.positions[:, :2], start[:, :2], atol=1e-9)
@@ -142,7 +148,7 @@ def cloth_on_slope(kind, degrees, *, static=0.5, kinetic=0.4, dt=5e-4):
         surface = np.zeros(3)
     sim = falling_cloth(8, [obstacle], dt=dt, size=0.3)
     flat = sim.model.rest_positions - sim.model.rest_positions.mean(axis=0)
-    sim.state.x[:] = tilt.apply(flat) + surface
+    sim.set_state(positions=tilt.apply(flat) + surface)
     downhill = tilt.apply([0.0, -1.0, 0.0])  # the slope falls towards -y tilted
     if downhill[2] > 0:
         downhill = -downhill

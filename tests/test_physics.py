@@ -58,7 +58,7 @@ def energy_history(integrator, steps, rng):
     sim = free_cloth(5, integrator=integrator, stability="ignore")
     # a tenth of symplectic Euler's limit (undamped explicit Euler has none)
     sim.dt = 0.1 * free_cloth(5).stable_dt()
-    sim.state.x += 0.02 * rng.standard_normal(sim.state.x.shape)
+    sim.set_state(positions=sim.positions + 0.02 * rng.standard_normal(sim.positions.shape))
     energies = np.empty(steps)
     for n in range(steps):
         sim.step()
@@ -90,8 +90,8 @@ def test_explicit_euler_energy_grows(rng):
 
 def test_free_cloth_conserves_momentum(rng):
     sim = free_cloth(6, damping=0.3)
-    sim.state.x += 0.03 * rng.standard_normal(sim.state.x.shape)
-    sim.state.v[:] = rng.standard_normal(sim.state.v.shape)
+    shape = sim.positions.shape
+    sim.set_state(sim.positions + 0.03 * rng.standard_normal(shape), rng.standard_normal(shape))
     mass = sim.model.mass
     before = mass @ sim.velocities
     sim.advance(200 * sim.dt)
@@ -253,7 +253,7 @@ def test_symplectic_stable_step_estimate_is_sharp(damping):
     kick = 1e-6 * rng.standard_normal((64, 3))
     for factor, should_diverge in ((0.95, False), (1.05, True)):
         sim = Simulation(scene, dt=factor * limit, stability="ignore")
-        sim.state.x += kick
+        sim.set_state(positions=sim.positions + kick)
         try:
             sim.advance(3000 * sim.dt)
             diverged = False

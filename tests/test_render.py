@@ -21,7 +21,7 @@ def cloth_pixels(image: np.ndarray) -> np.ndarray:
 
 
 def test_grid_point_k_is_solver_point_k():
-    from pvcloth.visual.view import cloth_grid
+    from pvcloth.visual.cloth_grid import cloth_grid
 
     sim = Simulation(small_scene(5).replace(cloth=pvcloth.ClothSpec(resolution=(5, 3))))
     grid = cloth_grid(sim.positions, sim.resolution)
@@ -44,7 +44,7 @@ def test_gif_has_the_frames_and_size_asked_and_the_cloth_moves(tmp_path):
     assert sim.time == pytest.approx(0.5)
     differences = [np.abs(frames[n + 1].astype(int) - frames[n]).mean() for n in range(5)]
     assert min(differences) > 0.5  # every frame shows motion
-    assert not list(tmp_path.glob(".*partial*"))
+    assert not list(tmp_path.glob(".*"))  # no hidden temporary left
 
 
 def test_cloth_pixels_are_where_the_camera_projects_the_cloth(tmp_path):
@@ -95,7 +95,7 @@ def test_divergence_mid_movie_keeps_a_valid_shorter_gif(tmp_path):
     assert caught.value.path == out and caught.value.frames >= 1
     assert "kept a valid GIF" in str(caught.value)
     assert len(iio.imread(out)) == caught.value.frames
-    assert not list(tmp_path.glob(".*partial*"))
+    assert not list(tmp_path.glob(".*"))  # no hidden temporary left
 
 
 def test_interruption_before_any_frame_leaves_no_file(tmp_path, monkeypatch):

@@ -493,7 +493,7 @@ def test_every_integrator_keeps_each_scene_from_passing_through_itself(
 
     x, v, t = pressed_state(name, n)
     sim, drive = ALL[name](n, "fast_mass_spring", True)
-    sim.state.x[:], sim.state.v[:], sim.state.t = x, v, t
+    sim.set_state(x, v, t)
     if drive is not None:
         drive(sim)
     assert count_self_intersections(sim.state.x, sim.resolution) == 0

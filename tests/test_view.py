@@ -108,7 +108,7 @@ def test_a_point_shows_the_colour_of_its_field_value():
     # x edges grow from 1 to 1.06 times their length; a point's stretch is
     # the mean over its x and y edges, so it grows from 1 to about 1.03
     x[:, 0] = rest[:, 0].min() + u + 0.03 * u**2
-    sim.state.x[:] = x
+    sim.set_state(positions=x)
     plotter = pv.Plotter(off_screen=True, window_size=(400, 400))
     clim = (0.97, 1.03)
     view = ClothView(sim, plotter, color="stretch", clim=clim, camera="none", show_pins=False)
@@ -175,7 +175,8 @@ def test_a_vertical_sheet_facing_the_default_camera_keeps_its_colour():
     # VTK's default light kit drew it at half its colour from this camera.
     import pyvista as pv
 
-    from pvcloth.visual.view import CLOTH_COLOR, ClothView
+    from pvcloth.visual.colors import CLOTH_COLOR
+    from pvcloth.visual.view import ClothView
 
     sim = Simulation(pvcloth.Scene())  # vertical, in the x-z plane
     plotter = pv.Plotter(off_screen=True, window_size=(240, 180))
@@ -212,7 +213,7 @@ def test_a_new_obstacle_shape_draws_its_own_surface_or_says_it_has_none():
     import pyvista as pv
 
     from pvcloth.physics.obstacles import Sphere
-    from pvcloth.visual.view import obstacle_surface
+    from pvcloth.visual.scenery import obstacle_surface
 
     class Blob(Sphere):
         pass

@@ -1,2 +1,3 @@
 """Files: time series for ParaView and Blender (``timeseries``), checkpoints
-(``checkpoint``) and the atomic writes both use (``files``)."""
+(``checkpoint``) and the one way every output is written, whole or not at
+all (``files``)."""

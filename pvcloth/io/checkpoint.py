@@ -21,17 +21,14 @@ import numpy as np
 
 from pvcloth.errors import CheckpointError, PvclothError
 from pvcloth.io.files import atomic_write
+from pvcloth.physics.clocks import MAX_STEPS
 from pvcloth.physics.integrators import INTEGRATORS
-from pvcloth.physics.simulation import (
-    MAX_STEPS,
-    MAX_STIFFNESS_SCALE,
-    MIN_STIFFNESS_SCALE,
-    SPEED_LIMIT,
-    Simulation,
-)
+from pvcloth.physics.live_edits import MAX_STIFFNESS_SCALE, MIN_STIFFNESS_SCALE
+from pvcloth.physics.simulation import SPEED_LIMIT
 from pvcloth.physics.state import State
 from pvcloth.scene.parts import MAX_LENGTH
 from pvcloth.scene.spec import Scene
+from pvcloth.simulation import Simulation
 
 TAG = "pvcloth-checkpoint"
 VERSION = 2

@@ -23,10 +23,11 @@ stretch, force N, energy J/m^2, pinned), so ParaView colours by any of them.
     OBJ importer set *Forward* to Y and *Up* to Z. Blender has no built-in
     sequence importer; an add-on (e.g. Stop-motion-OBJ) plays the folder.
 
-Every format is written into a hidden staging folder beside the output and
-moved into place when the writing stops, finished or interrupted (Ctrl-C,
-SIGTERM, an error): the frames done then form a readable series, and a run
-killed outright (SIGKILL) leaves an earlier export at that path as it was.
+Every file and frames folder is written under a hidden temporary name beside
+it and moved into place when the writing stops, finished or interrupted
+(Ctrl-C, SIGTERM, an error; :class:`pvcloth.io.files.Staged`): the frames
+done then form a readable series, and a run killed outright (SIGKILL) leaves
+an earlier export at that path as it was.
 A re-export replaces the whole frames folder, old frames and all; each
 format has a folder of its own. Nothing here changes the working directory.
 """
@@ -34,7 +35,7 @@ format has a folder of its own. Nothing here changes the working directory.
 from __future__ import annotations
 
 import os
-import shutil
+from contextlib import ExitStack
 from pathlib import Path
 from typing import TYPE_CHECKING
 from xml.sax.saxutils import quoteattr
@@ -43,7 +44,7 @@ import meshio
 import numpy as np
 
 from pvcloth.errors import ExportInterrupted, InputError
-from pvcloth.io.files import remove_orphaned_temporaries
+from pvcloth.io.files import Staged
 from pvcloth.physics import topology
 from pvcloth.physics.fields import MESH_FIELDS, point_fields
 from pvcloth.progress import frame_bar
@@ -145,70 +146,83 @@ def export(
     rest = sim.model.rest_positions
     done = 0
     bar = frame_bar(frame_numbers, frames, f"exporting {path.name}", enabled=progress)
-    # Everything is written into a hidden staging folder beside the output
-    # and moved into place when the writing stops (finished or interrupted),
-    # so a run killed midway leaves an earlier export at this path as it was;
-    # the staging folder of a dead process is removed by the next export.
-    remove_orphaned_temporaries(path)
-    staging = path.with_name(f".{path.stem}.{os.getpid()}.staging{path.suffix}")
-    staging.mkdir()
-    folder = f"{path.stem}_{'vtu' if suffix == '.pvd' else 'obj'}"
+    folder = path.with_name(f"{path.stem}_{'vtu' if suffix == '.pvd' else 'obj'}")
     entries: list[tuple[float, str]] = []  # PVD index: (time, frame file)
-    try:
+    # Every file and frames folder is written under a hidden temporary name
+    # beside it and published when the writing stops (finished or
+    # interrupted) with a frame written, so a run killed midway leaves an
+    # earlier export at this path as it was. The data goes before the index
+    # that names it.
+    with ExitStack() as temporaries:  # what is not published is removed
         if suffix == ".xdmf":
-            # meshio writes the .h5 as it goes and the .xdmf when closed.
-            # meshio 5.3's __enter__ opens the HDF5 file in the working
-            # directory (its name without the folder); opening it here by its
-            # full path instead, as __enter__ would, keeps the working
-            # directory alone (a chdir is process-wide: unsafe under threads).
-            import h5py
+            names = [path.with_suffix(".h5"), path]
+            outputs = [temporaries.enter_context(Staged(name)) for name in names]
+        else:
+            outputs = [temporaries.enter_context(Staged(folder, folder=True))]
+            if suffix == ".pvd":
+                outputs.append(temporaries.enter_context(Staged(path)))
+        try:
+            if suffix == ".xdmf":
+                # meshio writes the .h5 as it goes and the .xdmf when closed.
+                # meshio 5.3's __enter__ opens the HDF5 file in the working
+                # directory (its name without the folder); opening it here by
+                # its full path instead, as __enter__ would, keeps the working
+                # directory alone (a chdir is process-wide: unsafe under
+                # threads). The .xdmf names the HDF5 file by h5_filename's
+                # name: the published one, not the temporary's.
+                import h5py
 
-            writer = meshio.xdmf.TimeSeriesWriter(staging / path.name)
-            writer.h5_filename = str(staging / path.with_suffix(".h5").name)
-            writer.h5_file = h5py.File(writer.h5_filename, "w")
-            try:
-                writer.write_points_cells(rest, cells)
-                for _ in bar:
-                    with deferred():  # a frame is written whole
-                        writer.write_data(
-                            sim.time,
-                            point_data={
-                                "displacement": sim.positions - rest,
-                                **_fields(sim),
-                            },
+                h5, xdmf = outputs
+                writer = meshio.xdmf.TimeSeriesWriter(xdmf.temporary)
+                writer.h5_filename = str(h5.path)
+                writer.h5_file = h5py.File(h5.temporary, "w")
+                try:
+                    writer.write_points_cells(rest, cells)
+                    for _ in bar:
+                        with deferred():  # a frame is written whole
+                            writer.write_data(
+                                sim.time,
+                                point_data={
+                                    "displacement": sim.positions - rest,
+                                    **_fields(sim),
+                                },
+                            )
+                            done += 1
+                finally:
+                    with deferred(then_raise=False):  # closing writes the .xdmf itself
+                        writer.__exit__(None, None, None)
+                return path
+            staged = outputs[0].temporary
+            texture = grid_texture_coordinates(sim.resolution)
+            for n in bar:
+                name = f"{path.stem}_{n:05d}" + (".vtu" if suffix == ".pvd" else ".obj")
+                with deferred():  # a frame is written whole
+                    if suffix == ".pvd":
+                        mesh = meshio.Mesh(
+                            np.array(sim.positions),
+                            cells,
+                            point_data=_fields(sim),
                         )
-                        done += 1
-            finally:
-                with deferred(then_raise=False):  # closing writes the .xdmf itself
-                    writer.__exit__(None, None, None)
-            return path
-        (staging / folder).mkdir()
-        texture = grid_texture_coordinates(sim.resolution)
-        for n in bar:
-            name = f"{path.stem}_{n:05d}" + (".vtu" if suffix == ".pvd" else ".obj")
-            with deferred():  # a frame is written whole
-                if suffix == ".pvd":
-                    mesh = meshio.Mesh(
-                        np.array(sim.positions),
-                        cells,
-                        point_data=_fields(sim),
-                    )
-                    meshio.write(staging / folder / name, mesh)
-                    entries.append((sim.time, f"{folder}/{name}"))
-                else:
-                    write_obj(staging / folder / name, sim.positions, sim.model.shape, texture)
-                done += 1
-        return path if suffix == ".pvd" else path.with_name(folder)
-    except (Exception, KeyboardInterrupt) as error:
-        reason = "interrupted" if isinstance(error, KeyboardInterrupt) else str(error)
-        raise ExportInterrupted(
-            f"export stopped after {done} frame(s): {reason}\n"
-            f"the {done} frame(s) written in {path} stay readable",
-            done,
-        ) from error
-    finally:
-        with deferred(then_raise=False):  # once begun, moving into place must finish
-            _finish(staging, path, suffix, folder, entries, done)
+                        meshio.write(staged / name, mesh)
+                        entries.append((sim.time, f"{folder.name}/{name}"))
+                    else:
+                        write_obj(staged / name, sim.positions, sim.model.shape, texture)
+                    done += 1
+            return path if suffix == ".pvd" else folder
+        except (Exception, KeyboardInterrupt) as error:
+            reason = "interrupted" if isinstance(error, KeyboardInterrupt) else str(error)
+            raise ExportInterrupted(
+                f"export stopped after {done} frame(s): {reason}\n"
+                f"the {done} frame(s) written in {path} stay readable",
+                done,
+            ) from error
+        finally:
+            if done:  # the frames written form a valid series
+                with deferred(then_raise=False):  # once begun, publishing must finish
+                    if suffix == ".pvd":
+                        outputs[1].temporary.write_text(_pvd_index(entries))
+                    for output in outputs:
+                        output.publish()
 
 
 def _fields(sim) -> dict[str, np.ndarray]:
@@ -217,32 +231,3 @@ def _fields(sim) -> dict[str, np.ndarray]:
     fields = point_fields(sim, MESH_FIELDS)
     fields["pinned"] = fields["pinned"].astype(float)
     return fields
-
-
-def _finish(staging: Path, path: Path, suffix: str, folder: str, entries, done: int) -> None:
-    """Move the frames written (if any) from ``staging`` into place, then
-    remove ``staging``."""
-    if done:  # the frames written form a valid series
-        if suffix == ".pvd":
-            (staging / path.name).write_text(_pvd_index(entries))
-        if suffix == ".xdmf":
-            names = [path.with_suffix(".h5").name, path.name]
-        else:
-            names = [folder] + ([path.name] if suffix == ".pvd" else [])
-        _publish(staging, path.parent, names)
-    shutil.rmtree(staging, ignore_errors=True)
-
-
-def _publish(staging: Path, destination: Path, names: list[str]) -> None:
-    """Move ``names`` from ``staging`` into ``destination``, replacing what
-    is there: files by an atomic rename, folders by renaming the old one
-    aside first (so a re-export with fewer frames leaves none of the old)."""
-    for name in names:
-        source, target = staging / name, destination / name
-        if source.is_dir():
-            if target.exists():
-                aside = staging / f"{name}.replaced"
-                os.replace(target, aside)
-            os.replace(source, target)
-        else:
-            os.replace(source, target)

@@ -26,6 +26,7 @@ from pvcloth.physics.kernels import (
 from pvcloth.physics.obstacles import Contacts, build_obstacle
 from pvcloth.physics.self_collision import SelfCollision
 from pvcloth.physics.springs import Springs, SpringTable
+from pvcloth.physics.state import REVISIONS
 
 
 @dataclass
@@ -59,8 +60,12 @@ class Model:
     backend : {"numba", "numpy"}
         Where spring forces and the semi-implicit update are computed.
     revision : int
-        Counts the changes of constants (:meth:`apply`): integrators that
-        cache factorisations of them compare it.
+        A number new with every change of constants (:meth:`apply`) and never
+        used by another model (:data:`~pvcloth.physics.state.REVISIONS`):
+        integrators that cache factorisations key them by it.
+    serial : int
+        The model's own number, fixed for its life (what depends only on the
+        grid, such as a sparsity pattern, is keyed by it).
     """
 
     shape: tuple[int, int]
@@ -76,7 +81,7 @@ class Model:
     self_collision: SelfCollision | None = None
 
     def __post_init__(self):
-        self.revision = 0
+        self.serial = self.revision = next(REVISIONS)
         self._table: SpringTable | None = None
         self._plan = SpringPlan(self.springs, self.shape) if self.backend == "numba" else None
 
@@ -94,6 +99,34 @@ class Model:
     def other_forces(self) -> list[ForceTerm]:
         """The force terms that are not springs (gravity, air damping, wind)."""
         return [term for term in (self.gravity, self.air, self.wind) if term is not None]
+
+    # What the implicit integrators ask of the terms besides the springs
+    # (they hold springs in their matrices and the rest as loads): three
+    # questions, so that no integrator reads a term's fields.
+
+    @property
+    def air_rate(self) -> float:
+        """Air damping's rate (1/s): its force is ``-rate * m * v``; 0 without."""
+        return self.air.rate if self.air is not None else 0.0
+
+    def add_gravity(self, x: np.ndarray, v: np.ndarray, out: np.ndarray) -> None:
+        """Add the weights (N, shape (N, 3)) to ``out``; nothing without gravity."""
+        if self.gravity is not None:
+            self.gravity.accumulate(x, v, out)
+
+    def add_wind(self, x: np.ndarray, v: np.ndarray, out: np.ndarray) -> bool:
+        """Add the wind's force (N, shape (N, 3)) at positions ``x`` (m) and
+        velocities ``v`` (m/s) to ``out``; ``False`` (nothing added) without wind."""
+        if self.wind is None:
+            return False
+        self.wind.accumulate(x, v, out)
+        return True
+
+    def add_other_forces(self, x: np.ndarray, v: np.ndarray, out: np.ndarray) -> None:
+        """Add every force but the springs' (gravity, air damping, wind; N,
+        shape (N, 3)) at ``x`` (m) and ``v`` (m/s) to ``out``."""
+        for term in self.other_forces:
+            term.accumulate(x, v, out)
 
     def spring_table(self) -> SpringTable:
         """Every spring of every family as one flat table (kept until the
@@ -165,7 +198,7 @@ class Model:
         if self._plan is not None:
             self._plan.refresh()
         self._table = None
-        self.revision += 1
+        self.revision = next(REVISIONS)
 
     def set_time(self, t: float) -> None:
         """Tell time-dependent terms (gusty wind) the time of the coming step."""

@@ -48,6 +48,9 @@ class Step:
         them there (m/s), shape (P, 3).
     reports : dict
         What each operator reported, by its name.
+    integrator_check : tuple of (float, bool) or None
+        The integrator's own ``(largest speed, all finite)`` of ``after``
+        (``Integrator.check``), if it made one.
     """
 
     before: State
@@ -58,6 +61,7 @@ class Step:
     pin_positions: np.ndarray
     pin_velocity: np.ndarray
     reports: dict[str, Any] = field(default_factory=dict)
+    integrator_check: tuple[float, bool] | None = None
 
 
 class Operator(Protocol):
@@ -123,7 +127,7 @@ class Guard:
     """Reports ``(largest speed in m/s, every value finite)``. Without an
     operator that changes velocities after the integrator (obstacles,
     self-collision), the compiled step's own check is taken when it made one
-    (``State.checked``: pinned points included, their velocity being the one
+    (:attr:`Step.integrator_check`: pinned points included, their velocity being the one
     it used)."""
 
     name = "guard"
@@ -133,8 +137,8 @@ class Guard:
 
     def __call__(self, step: Step) -> None:
         after = step.after
-        if self.trust_integrator and after.checked is not None:
-            speed, finite = after.checked
+        if self.trust_integrator and step.integrator_check is not None:
+            speed, finite = step.integrator_check
             speed = speed if finite else np.inf
         else:
             speed = np.abs(after.v).max(initial=0.0)

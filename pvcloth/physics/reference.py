@@ -99,7 +99,8 @@ class FollowingReference:
         if dt is None:
             dt = reference_dt(scene, sim.dt)
         self.sim = Simulation(scene, integrator=REFERENCE_INTEGRATOR, dt=dt, stability="ignore")
-        self.sim.state = sim.state.copy() if sim.time > 0 else self.sim.state
+        if sim.time > 0:
+            self.sim.set_state(sim.state.x, sim.state.v, sim.state.t)
 
     def error(self, sim: Simulation) -> np.ndarray:
         """Distance (m) of each of ``sim``'s points from the reference's at

@@ -1,46 +1,42 @@
-"""The simulation: owns model, state and clock, and advances them."""
+"""The simulation: owns the model, the state and the clock, and advances them.
+
+:class:`Simulation` gathers parts that each do one job: the step size
+(:mod:`~pvcloth.physics.step_policy`), what follows the integrator in a step
+(:mod:`~pvcloth.physics.pipeline`), the clocks (:mod:`~pvcloth.physics.clocks`),
+live edits (:mod:`~pvcloth.physics.live_edits`) and pins
+(:mod:`~pvcloth.physics.pins`). Here are what ties them: the state's double
+buffer, one step, and what a viewer or a checkpoint reads. The cloth as a
+PyVista mesh is the layer above's (:class:`pvcloth.Simulation`).
+"""
 
 from __future__ import annotations
 
-import contextlib
-import dataclasses
 import math
-import sys
-from collections.abc import Iterator, Mapping
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from pvcloth.errors import DivergenceError, InputError, SceneError
+from pvcloth.errors import DivergenceError, InputError
 from pvcloth.physics import step_policy
-from pvcloth.physics.adaptive import StepController, steady_step
+from pvcloth.physics.adaptive import StepController
 from pvcloth.physics.auto import Choice, choose_integrator
-from pvcloth.physics.blas import one_blas_thread
+from pvcloth.physics.clocks import Clocks
 from pvcloth.physics.integrators import get_integrator
+from pvcloth.physics.live_edits import LiveEdits
+from pvcloth.physics.memory import check_memory
 from pvcloth.physics.model import build_model
+from pvcloth.physics.pins import Pins
 from pvcloth.physics.pipeline import Guard, Step, build_pipeline
 from pvcloth.physics.state import Control, Snapshot, State
 from pvcloth.scene.files import load_scene
-from pvcloth.scene.parts import AUTO, MAX_LENGTH, STABILITY_POLICIES, WindSpec
+from pvcloth.scene.parts import AUTO, MAX_LENGTH
 from pvcloth.scene.spec import Scene, html_table
-from pvcloth.scene.validation import choice, integer, real
 
 #: No cloth point moves faster than this (m/s) unless the solver blew up.
 SPEED_LIMIT = 1.0e4
-#: How far ``Simulation.scale_stiffness`` may take the springs from the scene's.
-MIN_STIFFNESS_SCALE, MAX_STIFFNESS_SCALE = 1e-6, 1e6
-#: Top-level scene keys that may change during a run (:meth:`Simulation.update`).
-LIVE_KEYS = ("springs", "gravity", "air_damping", "wind", "solver")
-#: Most steps one call may take: hours of wall time even for a tiny cloth.
-MAX_STEPS = 10**7
-#: Peak bytes per cloth point while a simulation is built: the stable-step
-#: estimate's sparse Jacobians dominate (9.2 kB at 256x256, falling with size,
-#: from `python benchmarks/memory.py`; stepping needs a tenth of it).
-PEAK_BYTES_PER_POINT = 9200
 
 
-class Simulation:
+class Simulation(Clocks, LiveEdits, Pins):
     """A cloth that moves.
 
     Parameters
@@ -73,9 +69,10 @@ class Simulation:
         The constants: grid, masses, force terms, obstacles.
     state : State
         The current positions ``(N, 3)`` m, velocities ``(N, 3)`` m/s and
-        time s. Each step makes a new current state (in the memory of the
-        one before last, when nobody else holds that): a state you hold is
-        never written again, so another thread may read it.
+        time s, read-only: change them with :meth:`set_state`. The
+        simulation owns two states and writes each step into the one not
+        current, so a state read now is overwritten two steps later: copy
+        what you keep (``state.copy()``, :meth:`snapshot`).
     control : Control
         Pins and their targets.
     integrator : Integrator
@@ -136,7 +133,7 @@ class Simulation:
         #: Springs' stiffness and damping relative to the scene's at the start
         #: (changed by :meth:`scale_stiffness`).
         self.stiffness_scale = 1.0
-        _check_memory(scene)
+        check_memory(scene)
         self.model = build_model(scene, backend)
         #: What each step goes through after the integrator (obstacles, pins,
         #: self-collision, the divergence guard): only what the scene needs.
@@ -196,81 +193,80 @@ class Simulation:
     def reset(self) -> None:
         """Back to the initial state, pins as the scene gives them."""
         x = self.model.rest_positions.copy()
-        self.state = State(x, np.zeros_like(x), 0.0)
+        # The double buffer: each step reads the current state and writes the
+        # spare one, then they swap. Reusing the memory saves fresh pages at
+        # every step (2.6 ms of a 4.5 ms step at 256x256 went to page faults).
+        self._state = _frozen(State(x, np.zeros_like(x), 0.0))
+        self._spare = State(np.empty_like(x), np.empty_like(x))
+        # A step's velocities when moving pins need other ones than the
+        # state's (see _substep): never the current state's own rows.
+        self._pin_velocities = np.empty_like(x)
         self.control = Control.from_model(self.model)
         #: Steps taken since the start.
         self.steps = 0
         #: Simulated seconds asked for (by advance) but not yet stepped: less than dt.
         self.owed = 0.0
-        self._spare = None  # a replaced state the next step may reuse
-        self.update_mesh()
-
-    # -- the cloth as a PyVista mesh -------------------------------------------
-
-    _mesh = None  # built on first use of ``mesh``: physics runs without PyVista
+        self._state_changed()
 
     @property
-    def mesh(self):
-        """The cloth as a ``pyvista.StructuredGrid`` of dimensions ``(nx, ny, 1)``.
+    def state(self) -> State:
+        """The current state (read-only arrays; see the class's attributes)."""
+        return self._state
 
-        The same object for the life of the simulation, its points and point
-        data updated in place after every :meth:`advance`, :meth:`step` and
-        :meth:`reset`, so a plotter showing it or a script holding it sees the
-        current cloth. Point ``k`` is solver point ``k``. Point data (colour
-        by any of them, e.g. ``sim.plot(scalars="speed")``):
+    def set_state(self, positions=None, velocities=None, time=None, *, steps=None) -> None:
+        """Replace the current state: the way to edit it by hand.
 
-        - ``velocity`` (N, 3), m/s
-        - ``speed`` (N,), m/s
-        - ``stretch`` (N,), local length over rest length (1 at rest)
-        - ``force`` (N,), N, mean elastic force of the springs at the point
-        - ``energy`` (N,), J/m^2, elastic energy density
-          (:mod:`pvcloth.physics.fields`)
-        - ``pinned`` (N,), 1 where the point is pinned, else 0
-
-        Examples
-        --------
-        >>> import pvcloth
-        >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
-        >>> mesh = sim.mesh
-        >>> mesh.dimensions, mesh.n_points
-        ((8, 8, 1), 64)
-        >>> sim.advance(0.1)
-        >>> sim.mesh is mesh, bool(mesh.points[:, 2].min() < sim.model.rest_positions[:, 2].min())
-        (True, True)
-        >>> sorted(mesh.point_data.keys())
-        ['energy', 'force', 'pinned', 'speed', 'stretch', 'velocity']
-        """
-        if self._mesh is None:
-            from pvcloth.visual.view import (
-                cloth_mesh,  # the view layer, imported only when asked for
-            )
-
-            self._mesh = cloth_mesh(self)
-        return self._mesh
-
-    def update_mesh(self) -> None:
-        """Copy the current state into :attr:`mesh` (done after every advance;
-        call it after editing ``sim.state`` by hand). Costs nothing until the
-        mesh is first used."""
-        if self._mesh is not None:
-            from pvcloth.visual.view import update_cloth_mesh
-
-            update_cloth_mesh(self._mesh, self)
-
-    def plot(self, **kwargs):
-        """Show the cloth as ``mesh.plot()`` does (keywords go to
-        :func:`pyvista.plot`); the cloth's colour unless ``scalars`` is given.
+        Parameters
+        ----------
+        positions, velocities : array_like, shape (N, 3), optional
+            New positions (m, each coordinate within
+            :data:`~pvcloth.scene.parts.MAX_LENGTH`) and velocities (m/s,
+            each speed under :data:`SPEED_LIMIT`); copied. Left out: as now.
+        time : float, optional
+            The new time (s, finite and not negative); left out: as now.
+        steps : int, optional
+            The steps counted as taken (a restored run's); left out: as now.
 
         Examples
         --------
-        >>> import pvcloth
+        >>> import numpy as np, pvcloth
         >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
-        >>> sim.advance(0.2)
-        >>> sim.plot(scalars="stretch", off_screen=True, screenshot="stretch.png")
+        >>> push = np.zeros((64, 3)); push[:, 1] = 1.5
+        >>> sim.set_state(velocities=push)
+        >>> float(sim.velocities[:, 1].mean())
+        1.5
+        >>> sim.set_state(velocities=np.zeros((3, 3)))
+        Traceback (most recent call last):
+        ...
+        pvcloth.errors.InputError: velocities: expected shape (64, 3), got (3, 3)
         """
-        from pvcloth.visual.view import plot_cloth
+        now = self._state
+        x = now.x if positions is None else _array("positions", positions, now.x.shape)
+        v = now.v if velocities is None else _array("velocities", velocities, now.v.shape)
+        if np.abs(x).max(initial=0.0) > MAX_LENGTH:
+            raise InputError("positions", f"each coordinate must be within +-{MAX_LENGTH:g} m")
+        if np.linalg.norm(v, axis=1).max(initial=0.0) >= SPEED_LIMIT:
+            raise InputError("velocities", f"each speed must be under {SPEED_LIMIT:g} m/s")
+        t = now.t
+        if time is not None:
+            t = float(time)
+            if not (math.isfinite(t) and t >= 0.0):
+                raise InputError("time", f"expected a finite time >= 0 s, got {time!r}")
+        if steps is not None:
+            if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
+                raise InputError("steps", f"expected a whole number >= 0, got {steps!r}")
+            self.steps = int(steps)
+        # Into the spare buffer, then swapped in: the current arrays are never written.
+        spare = _thawed(self._spare)
+        np.copyto(spare.x, x)
+        np.copyto(spare.v, v)
+        spare.t = t
+        self._spare, self._state = self._state, _frozen(spare)
+        self._state_changed()
 
-        return plot_cloth(self, **kwargs)
+    def _state_changed(self) -> None:
+        """Called whenever the current state changed (steps, reset, set_state):
+        the layer above refreshes its mesh here. Nothing to do in the physics."""
 
     # -- how it reads in a terminal and a notebook -------------------------------
 
@@ -413,214 +409,6 @@ class Simulation:
         still stops such a run, and its message says so)."""
         return self.integrator.stable_dt(self.model, self.state, self.control)
 
-    # -- pins ------------------------------------------------------------------
-
-    def point_index(self, point) -> int:
-        """Flat index of a point given as an index or an ``(i, j)`` pair."""
-        nx, ny = self.resolution
-        if isinstance(point, (tuple, list)) and len(point) == 2:
-            i = integer("point[0] (i)", point[0], minimum=0, maximum=nx - 1, error=InputError)
-            j = integer("point[1] (j)", point[1], minimum=0, maximum=ny - 1, error=InputError)
-            return i + nx * j
-        if isinstance(point, (int, np.integer)) and not isinstance(point, bool):
-            return integer("point", point, minimum=0, maximum=nx * ny - 1, error=InputError)
-        raise InputError(
-            "point",
-            f"expected an index 0..{nx * ny - 1} or an (i, j) pair of whole numbers, got {point!r}",
-        )
-
-    @staticmethod
-    def _target(position) -> np.ndarray:
-        """A pin target: three finite coordinates in metres, within
-        ``MAX_LENGTH`` of the origin (like every position in a scene)."""
-        try:
-            target = np.asarray(position, dtype=float)
-        except (TypeError, ValueError, OverflowError):
-            target = None
-        if target is None or target.shape != (3,) or not np.isfinite(target).all():
-            raise InputError(
-                "position",
-                f"expected three finite coordinates (x, y, z) in metres, got {position!r}",
-            )
-        if np.abs(target).max() > MAX_LENGTH:
-            raise InputError(
-                "position", f"each coordinate must be within +-{MAX_LENGTH:g} m, got {position!r}"
-            )
-        return target
-
-    def pin(self, point, position=None) -> None:
-        """Hold a point at ``position`` (default: where it is now)."""
-        k = self.point_index(point)
-        target = self.state.x[k] if position is None else self._target(position)
-        self.control.pin(k, target)
-
-    def move_pin(self, point, position) -> None:
-        """Set a pinned point's target; it gets there over the next advance."""
-        k = self.point_index(point)
-        if not self.control.pinned[k]:
-            raise InputError("point", f"point {k} is not pinned; pin it first")
-        self.control.targets[k] = self._target(position)
-
-    def unpin(self, point) -> None:
-        """Let a pinned point move freely."""
-        self.control.unpin(self.point_index(point))
-
-    def restore_scene_pins(self) -> None:
-        """Drop every pin added since the start; keep the scene's own."""
-        self.control.pinned = self.model.pinned
-
-    @property
-    def pinned_indices(self) -> np.ndarray:
-        return self.control.pinned_index
-
-    # -- live edits ------------------------------------------------------------
-
-    def update(self, changes: Mapping[str, Any], *, stability: str | None = None) -> None:
-        """Change the running simulation's scene by dotted keys, the same keys
-        scene files, ``--set`` and sweeps use (:mod:`pvcloth.scene.overrides`).
-
-        The new scene is validated first; then the model's constants, the
-        integrator and the step follow it, and ``sim.scene`` becomes it, so
-        a checkpoint taken afterwards resumes the edited run. Nothing
-        changes if any part is refused.
-
-        Parameters
-        ----------
-        changes : mapping
-            ``{"springs.structural.stiffness": 1200, "wind.velocity": [3, 0, 0],
-            "solver.integrator": "rk4", "solver.dt": None, ...}``. Live keys
-            are under ``springs`` (constants of the families the scene has),
-            ``gravity``, ``air_damping``, ``wind`` and ``solver``.
-        stability : {"refuse", "substep", "ignore"}, optional
-            How the step is checked against the new stable step (default:
-            the new scene's ``solver.stability``).
-
-        Raises
-        ------
-        SceneError
-            A bad key or value, or a step the policy refuses.
-        InputError
-            A key that cannot change during a run (the grid, the pins of the
-            scene, the obstacles): build a new simulation for those.
-
-        Examples
-        --------
-        >>> import pvcloth
-        >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
-        >>> sim.update({"springs.structural.stiffness": 800, "solver.integrator": "verlet"})
-        >>> sim.scene.springs.structural.stiffness, sim.integrator.name
-        (800.0, 'verlet')
-        """
-        self._apply(self.scene.with_overrides(changes), stability)
-
-    def _apply(self, scene: Scene, stability: str | None) -> None:
-        """Run ``scene`` from here on (see :meth:`update`)."""
-        fixed = [
-            f.name
-            for f in dataclasses.fields(Scene)
-            if f.name not in LIVE_KEYS and getattr(scene, f.name) != getattr(self.scene, f.name)
-        ]
-
-        def built(springs) -> list[bool]:  # which families exist: fixed by the build
-            return [getattr(springs, f) is not None for f in ("structural", "shear", "bending")]
-
-        if built(scene.springs) != built(self.scene.springs):
-            fixed.append("springs (a family added or removed)")
-        if fixed:
-            raise InputError(
-                "changes",
-                f"{', '.join(fixed)} cannot change during a run; build a new Simulation for "
-                f"that (live: {', '.join(LIVE_KEYS)})",
-            )
-        policy = scene.solver.stability if stability is None else stability
-        policy = choice("stability", policy, STABILITY_POLICIES, error=InputError)
-        scene = self._resolve_auto(scene)
-        before = (self.scene, self.integrator, self.dt)
-        self.model.apply(scene)
-        solver, was = scene.solver, self.scene.solver
-        if (solver.method, solver.iterations) != (self.integrator.name, was.iterations):
-            self.integrator = get_integrator(solver.method, solver.iterations)
-        # The stable step depends on the springs, air damping and the
-        # integrator, not on wind; gravity sets the contact step.
-        step_depends = ("springs", "air_damping", "solver")
-        if scene.self_collision is not None:
-            step_depends += ("gravity",)
-        if any(getattr(scene, name) != getattr(self.scene, name) for name in step_depends):
-            try:
-                current, self.scene = self.scene, scene  # the step rule reads the new solver
-                try:
-                    self.dt = self._checked_step(scene.solver.dt, policy)
-                    self._start_controller()
-                finally:
-                    self.scene = current
-            except BaseException:
-                self.model.apply(before[0])
-                self.integrator, self.dt = before[1], before[2]
-                self._start_controller()
-                raise
-        self.scene = scene
-
-    def scale_stiffness(self, factor: float) -> None:
-        """Multiply every spring's stiffness and damping by ``factor`` (> 0),
-        e.g. from a slider; the step is re-checked against the new limit and
-        split into substeps if it became unstable (softer springs give back a
-        step that stiffer ones split).
-
-        The springs may end up between :data:`MIN_STIFFNESS_SCALE` and
-        :data:`MAX_STIFFNESS_SCALE` times the scene's at the start (beyond
-        that the stable-step arithmetic under- or overflows);
-        ``stiffness_scale`` says where they are."""
-        factor = real("factor", factor, minimum=0.0, exclusive=True, error=InputError)
-        scale = self.stiffness_scale * factor
-        if not MIN_STIFFNESS_SCALE <= scale <= MAX_STIFFNESS_SCALE:
-            raise InputError(
-                "factor",
-                f"{factor:g} would make the springs {scale:.3g} times the scene's; allowed "
-                f"is {MIN_STIFFNESS_SCALE:g} to {MAX_STIFFNESS_SCALE:g} times",
-            )
-        changes = {}
-        for family in ("structural", "shear", "bending"):
-            spec = getattr(self.scene.springs, family)
-            if spec is not None:
-                changes[f"springs.{family}.stiffness"] = spec.stiffness * factor
-                changes[f"springs.{family}.damping"] = spec.damping * factor
-        self.update(changes, stability="substep")
-        self.stiffness_scale = scale
-
-    def set_wind(self, wind) -> None:
-        """Replace the scene's wind mid-run (``None`` removes the term).
-
-        Parameters
-        ----------
-        wind : WindSpec or None
-        """
-        if wind is not None and not isinstance(wind, WindSpec):
-            raise InputError("wind", f"expected a WindSpec or None, got {type(wind).__name__}")
-        self._apply(self.scene.replace(wind=wind), "substep")
-
-    def set_integrator(self, name: str) -> None:
-        """Switch integrator mid-run; the step asked for is kept if stable,
-        else split into substeps (an automatic step is chosen anew)."""
-        self.update({"solver.integrator": name}, stability="substep")
-
-    def set_step(self, dt: float | None, stability: str = "refuse") -> None:
-        """Ask for a new step mid-run: ``None`` for the automatic one (half
-        the stable step for explicit integrators, 1/60 s for implicit
-        ones), else ``dt`` in seconds, checked as ``stability`` says
-        (``"refuse"`` raises :class:`SceneError` above the stable share and
-        leaves the step as it was).
-
-        Examples
-        --------
-        >>> import pvcloth
-        >>> sim = pvcloth.Simulation(pvcloth.Scene(), integrator="implicit_euler")
-        >>> sim.set_step(None); round(1 / sim.dt)
-        60
-        >>> sim.set_step(0.01); sim.dt, sim.dt_source
-        (0.01, 'given')
-        """
-        self.update({"solver.dt": dt}, stability=stability)
-
     @classmethod
     def resumed(
         cls,
@@ -646,126 +434,15 @@ class Simulation:
         sim = cls(scene, dt=dt, stability="ignore", backend=backend)
         sim.scene = scene  # the saved solver settings, not the override above
         sim.stiffness_scale = stiffness_scale
-        sim.state = State(state.x.copy(), state.v.copy(), state.t)
-        sim.steps, sim.owed = steps, owed
+        sim.set_state(state.x, state.v, state.t, steps=steps)
+        sim.owed = owed
         sim.control.targets[:] = targets
         sim.control.pinned = pinned
         sim.integrator.set_state(integrator_state)
         if sim.controller is not None and controller_state is not None:
             sim.controller.set_state(controller_state, step=dt)
             sim.dt = dt
-        sim.update_mesh()
         return sim
-
-    # -- time stepping ---------------------------------------------------------
-
-    def advance(self, seconds: float) -> None:
-        """Simulate ``seconds`` more, in fixed substeps of ``dt``.
-
-        Time not covered by whole substeps is carried over to the next call,
-        so many short advances add up to the same run as one long one. Pinned
-        points move in a straight line to their targets over the substeps.
-
-        Raises
-        ------
-        DivergenceError
-            If the state stops being finite or bounded; the state is left at
-            the last good step.
-        SceneError
-            If ``seconds`` would take more than :data:`MAX_STEPS` steps (the
-            run is refused before it starts).
-        """
-        seconds = real("seconds", seconds, minimum=0.0, error=InputError)
-        if self.controller is not None:
-            self._advance_adaptive(seconds)
-            return
-        self.check_run_length(self.owed + seconds)
-        self.owed += seconds
-        n = math.floor(self.owed / self.dt + 1e-9)
-        self.owed = max(self.owed - n * self.dt, 0.0)
-        if n == 0:
-            return
-        pinned = self.control.pinned_index
-        start = self.state.x[pinned].copy()
-        goal = self.control.targets[pinned].copy()
-        try:
-            with self._one_pool():
-                for s in range(1, n + 1):
-                    self._substep(pinned, start + (goal - start) * (s / n))
-        finally:  # after a divergence too: the mesh shows the last good state
-            self.update_mesh()
-
-    def frames(self, count: int, fps: float, before_frame=None) -> Iterator[int]:
-        """The frame loop movies, exports and studies share: yields ``0, 1,
-        ..., count - 1``, frame 0 at the current state and every later one
-        ``1 / fps`` simulated seconds after the one before.
-
-        The whole run's length is checked before the first frame (a run of
-        more than :data:`MAX_STEPS` steps is refused, not found out after
-        hours).
-
-        Parameters
-        ----------
-        count : int
-            Frames, at least 1.
-        fps : float
-            Frames per simulated second, in (0, 1000].
-        before_frame : callable, optional
-            ``before_frame(sim, n)`` runs before frame ``n`` is advanced
-            to (e.g. to move a pin along a scripted path).
-
-        Examples
-        --------
-        >>> import pvcloth
-        >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
-        >>> [round(sim.time, 3) for n in sim.frames(4, fps=10)]
-        [0.0, 0.1, 0.2, 0.3]
-        """
-        count = integer("frames", count, minimum=1, maximum=MAX_STEPS, error=InputError)
-        fps = real("fps", fps, minimum=0.0, exclusive=True, maximum=1000.0, error=InputError)
-        self.check_run_length((count - 1) / fps)
-        return self._frames(count, fps, before_frame)
-
-    def _frames(self, count: int, fps: float, before_frame) -> Iterator[int]:
-        for n in range(count):
-            if before_frame is not None:
-                before_frame(self, n)
-            if n:
-                self.advance(1.0 / fps)
-            yield n
-
-    def check_run_length(self, seconds: float) -> int:
-        """The number of steps ``seconds`` of simulation take; a
-        :class:`SceneError` if that is more than :data:`MAX_STEPS` (a step
-        far below what the run needs would otherwise look like a hang)."""
-        steps = seconds / self.dt
-        if not steps <= MAX_STEPS:
-            raise SceneError(
-                "solver.dt",
-                f"{seconds:.4g} s of simulation at dt = {self.dt:.3g} s is {steps:.3g} steps, "
-                f"more than the {MAX_STEPS:.0e} pvcloth runs in one go. Use a larger step "
-                f"(leave solver.dt out for one chosen from the stable step) or simulate less "
-                f"time per call.",
-            )
-        return math.floor(steps + 1e-9)
-
-    def step(self) -> None:
-        """One substep of ``dt``."""
-        self.owed = 0.0
-        pinned = self.control.pinned_index
-        try:
-            with self._one_pool():
-                self._substep(pinned, self.control.targets[pinned])
-        finally:
-            self.update_mesh()
-
-    def _one_pool(self):
-        """On the compiled kernels, BLAS on one thread while an integrator
-        that calls it steps: the kernels' OpenMP threads take the cores (see
-        :mod:`pvcloth.physics.blas`)."""
-        if self.model.backend == "numba" and self.integrator.uses_blas:
-            return one_blas_thread()
-        return contextlib.nullcontext()
 
     def _start_controller(self) -> None:
         """A step controller when the scene gives a tolerance (and an
@@ -793,97 +470,56 @@ class Simulation:
         self.choice = choose_integrator(scene, type(self))
         return scene.with_overrides({"solver.integrator": self.choice.name})
 
-    def _advance_adaptive(self, seconds: float) -> None:
-        """Steps chosen by the controller until exactly ``seconds`` later;
-        rejected ones are retried shorter and leave no trace."""
-        control = self.controller
-        steady = self.integrator.steady_steps
-        end = self.state.t + seconds
-        pinned = self.control.pinned_index
-        start_time = self.state.t
-        start = self.state.x[pinned].copy()
-        goal = self.control.targets[pinned].copy()
-        try:
-            while self.state.t < end - 1e-12 * max(1.0, end):
-                if control.step < control.min_step:
-                    raise DivergenceError(
-                        f"simulation stopped at t = {self.state.t:.6g} s: {self.integrator.name}"
-                        f" needed steps under {control.min_step:g} s (solver.min_dt) to keep "
-                        f"its error under {control.tolerance:g} m per second; the step had "
-                        f"fallen to {control.step:.3g} s. A blow-up, or a tolerance too tight "
-                        f"for this cloth: loosen solver.tolerance, lower solver.min_dt, or "
-                        f"try an implicit integrator"
-                    )
-                natural = control.step
-                remaining = end - self.state.t
-                if steady and control.taken > 0.0:
-                    # Keep the step (and its factorisation) unless worth changing.
-                    h = steady_step(natural, control.taken, remaining)
-                else:
-                    h = min(natural, remaining)
-                    if remaining - h < 1e-9 * h:  # no sliver of a step left over
-                        h = remaining
-                share = (self.state.t + h - start_time) / seconds
-                if self._substep(pinned, start + (goal - start) * share, dt=h):
-                    if h < natural:
-                        # Cut short to land on the end, not for its error:
-                        # the next advance starts from the step the controller
-                        # wanted (else every frame's end restarted it small).
-                        control.step = max(control.step, natural)
-                    self.dt = control.step
-        finally:  # after a divergence too: the mesh shows the last good state
-            self.update_mesh()
-
     def _substep(
         self, pinned: np.ndarray, pin_positions: np.ndarray, dt: float | None = None
     ) -> bool:
-        """One step of ``dt`` (default: the fixed step); with a controller,
+        """One step of ``dt`` (default: the fixed step) from the current state
+        into the spare one, which becomes current; with a controller,
         ``False`` when its error estimate rejected it (nothing changed)."""
         dt = self.dt if dt is None else dt
-        state = self.state
+        state = self._state
         # Pinned points have zero inverse mass, so integrators move them at
-        # their velocity: the one that lands them on their target.
+        # their velocity: the one that lands them on their target. The step
+        # starts from a state whose pinned rows carry it; the current state
+        # holds it already while pins stand still (the last step landed them
+        # at rest), else a copy of its velocities does.
         pin_velocity = (pin_positions - state.x[pinned]) / dt
-        state.v[pinned] = pin_velocity
+        if not np.array_equal(state.v[pinned], pin_velocity):
+            np.copyto(self._pin_velocities, state.v)
+            self._pin_velocities[pinned] = pin_velocity
+            state = State(state.x, self._pin_velocities, state.t)
         model = self.model
         model.set_time(state.t)
-        spare = self._take_spare()
+        spare = _thawed(self._spare)
         with np.errstate(all="ignore"):
             new = self.integrator.step(model, state, self.control, dt, out=spare)
             if self.controller is not None:
                 self.controller.step = dt
                 if not self.controller.judge(self.integrator.error):
-                    self._spare = spare
                     return False
                 new.t = state.t + dt
             else:
                 new.t = (self.steps + 1) * dt if self._uniform_clock(state) else state.t + dt
-        step = Step(state, new, self.control, dt, pinned, pin_positions, pin_velocity)
+        step = Step(
+            state,
+            new,
+            self.control,
+            dt,
+            pinned,
+            pin_positions,
+            pin_velocity,
+            integrator_check=self.integrator.check,
+        )
         for operator in self.pipeline:
             operator(step)
         speed, finite = step.reports[Guard.name]
         if not speed <= SPEED_LIMIT or not finite:
-            self._spare = spare
             raise DivergenceError(self._divergence_message(speed))
-        self._spare = state
-        self.state = new
+        # The state replaced is the next step's spare (an integrator that
+        # returned new arrays leaves the old spare to the collector).
+        self._spare, self._state = self._state, _frozen(new)
         self.steps += 1
         return True
-
-    def _take_spare(self) -> State | None:
-        """The state the last step replaced, for the next step to write over,
-        if nothing outside the simulation still holds it or its arrays (a
-        ``before = sim.state``, a kept ``sim.positions`` view); else ``None``
-        and the integrator takes new memory. Reusing it saves fresh pages at
-        every step: 2.6 ms of a 4.5 ms step at 256x256 went to page faults."""
-        spare, self._spare = self._spare, None
-        if spare is None or _reference_counts(spare) != _UNSHARED:
-            return None
-        return spare
-
-    def _uniform_clock(self, state) -> bool:
-        # Time as steps * dt avoids summing round-off, while dt never changed.
-        return abs(state.t - self.steps * self.dt) <= 1e-9 * max(1.0, state.t)
 
     def _divergence_message(self, speed: float) -> str:
         what = "became non-finite" if not np.isfinite(speed) else f"reached {speed:.3g} m/s"
@@ -912,44 +548,28 @@ class Simulation:
         return message
 
 
-def _reference_counts(state: State) -> tuple[int, int, int]:
-    return sys.getrefcount(state), sys.getrefcount(state.x), sys.getrefcount(state.v)
+def _frozen(state: State) -> State:
+    """``state`` with read-only arrays: how a current state is kept from writes."""
+    state.x.flags.writeable = state.v.flags.writeable = False
+    return state
 
 
-def _unshared_counts() -> tuple[int, int, int]:
-    # What _reference_counts gives for a state held only by a local name,
-    # called the way _take_spare calls it (the interpreter decides the
-    # numbers; measured here rather than assumed).
-    spare = State(np.empty((1, 3)), np.empty((1, 3)))
-    return _reference_counts(spare)
+def _thawed(state: State) -> State:
+    """``state`` writable again: the spare buffer, about to be written."""
+    state.x.flags.writeable = state.v.flags.writeable = True
+    return state
 
 
-_UNSHARED = _unshared_counts()
-
-
-def available_memory() -> float | None:
-    """Bytes of memory available to a new allocation (Linux's MemAvailable),
-    or None where that cannot be read."""
+def _array(name: str, value, shape: tuple[int, ...]) -> np.ndarray:
+    """``value`` as a finite float array of ``shape``, or an :class:`InputError`."""
     try:
-        with open("/proc/meminfo", encoding="ascii") as info:
-            for line in info:
-                if line.startswith("MemAvailable:"):
-                    return 1024.0 * float(line.split()[1])
-    except (OSError, ValueError, IndexError):
-        pass
-    return None
-
-
-def _check_memory(scene: Scene) -> None:
-    """Refuse, before any allocation, a cloth the machine cannot hold."""
-    nx, ny = scene.cloth.resolution
-    need = float(nx * ny * PEAK_BYTES_PER_POINT)
-    have = available_memory()
-    if have is not None and need > 0.9 * have:
-        raise SceneError(
-            "cloth.resolution",
-            f"{nx} x {ny} = {nx * ny:,} points need about {need / 1e9:.3g} GB while the "
-            f"simulation is built ({PEAK_BYTES_PER_POINT / 1e3:.1f} kB per point), and "
-            f"{have / 1e9:.3g} GB are available. Use fewer points: about "
-            f"{int((0.9 * have / PEAK_BYTES_PER_POINT) ** 0.5)} per side would fit.",
-        )
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(
+            name, f"expected numbers of shape {shape}, got {type(value).__name__}"
+        ) from None
+    if array.shape != shape:
+        raise InputError(name, f"expected shape {shape}, got {array.shape}")
+    if not np.isfinite(array).all():
+        raise InputError(name, "every value must be finite")
+    return array

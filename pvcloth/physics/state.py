@@ -7,11 +7,18 @@ changing arrays in :class:`State` and what the user imposes from outside
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
 
 from pvcloth.errors import InputError
+
+#: Revision numbers for everything integrators cache work on (a model's
+#: constants, a control's pinned set): drawn from one counter, so a number is
+#: never reused, not by another object either, and a cache keyed by it needs
+#: no ``id()`` (which a new object may inherit from a freed one).
+REVISIONS = itertools.count(1)
 
 
 @dataclass
@@ -31,9 +38,6 @@ class State:
     x: np.ndarray
     v: np.ndarray
     t: float = 0.0
-    #: ``(largest speed, all finite)`` if the integrator found them on the
-    #: way (the compiled step does), so the divergence guard need not look.
-    checked: tuple[float, bool] | None = None
 
     def copy(self) -> State:
         return State(self.x.copy(), self.v.copy(), self.t)
@@ -67,13 +71,13 @@ class Control:
         Target positions in metres; only rows of pinned points are used.
         Writable: moving a target changes nothing else.
     revision : int
-        Counts the changes of the pinned set.
+        A number new with every change of the pinned set, never used by
+        another control (:data:`REVISIONS`).
     """
 
     def __init__(self, mass: np.ndarray, pinned: np.ndarray, targets: np.ndarray):
         self._mass = np.asarray(mass, dtype=float)
         self.targets = np.asarray(targets, dtype=float)
-        self.revision = 0
         self.pinned = pinned
 
     @classmethod
@@ -98,7 +102,7 @@ class Control:
         self._pinned, self._inv_mass = mask, inv_mass
         self._pinned_index = np.flatnonzero(mask)
         self._movable_index = np.flatnonzero(~mask)
-        self.revision += 1
+        self.revision = next(REVISIONS)
 
     @property
     def inv_mass(self) -> np.ndarray:

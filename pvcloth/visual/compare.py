@@ -208,7 +208,8 @@ def _draw_panels(plotter, panels: list[Panel], reference, color):
     """One view per panel under a shared framing camera; returns the frame
     update and the progress note."""
     from pvcloth.visual.camera import VIEWS, FramingCamera
-    from pvcloth.visual.view import ClothView, ColorRange
+    from pvcloth.visual.colors import ColorRange
+    from pvcloth.visual.view import ClothView
 
     shared = ColorRange(color) if color else None
     views, labels = [], []

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from pvcloth.errors import InputError, MovieInterrupted
-from pvcloth.io.files import remove_orphaned_temporaries
+from pvcloth.io.files import Staged
 from pvcloth.progress import frame_bar
 from pvcloth.signals import deferred
 
@@ -195,7 +195,7 @@ def render(
         the reference run too).
     color : str, optional
         Colour the cloth by a field (``"stretch"``, ``"speed"``, ``"force"``,
-        ``"energy"`` or ``"error"``; see :data:`pvcloth.visual.view.FIELDS`),
+        ``"energy"`` or ``"error"``; see :data:`pvcloth.visual.colors.FIELDS`),
         with a scalar bar in its unit. ``"error"`` runs a fine RK4 reference
         beside the simulation (:class:`pvcloth.physics.reference.FollowingReference`).
     clim : (float, float), optional
@@ -230,7 +230,7 @@ def render(
     >>> stats = pvcloth.render(sim, "stretch.png", frames=6, color="stretch", progress=False)
     """
     path = check_output(output, fps)
-    from pvcloth.visual.view import check_cmap, check_field
+    from pvcloth.visual.colors import check_cmap, check_field
 
     check_field(color)
     check_cmap(cmap)
@@ -296,79 +296,79 @@ def record(
     ``row_weights``).
     """
     path.parent.mkdir(parents=True, exist_ok=True)
-    # Hidden, named with this process's id: one left by a killed run is
-    # removed by the next run's atomic_write clean-up.
-    remove_orphaned_temporaries(path)
-    partial = path.with_name(f".{path.stem}.{os.getpid()}.partial{path.suffix}")
     stats = RenderStats(path, 0)
+    # Written under a hidden temporary name, published whole when finished
+    # or, interrupted, with the frames done; anything else removes it.
+    with Staged(path) as output:
+        # notebook=False: in Jupyter, show() would otherwise put a picture or a
+        # widget of this plotter in the cell, besides the movie asked for.
+        with deferred():  # a signal inside VTK's module set-up crashed the process
+            import pyvista as pv
 
-    # notebook=False: in Jupyter, show() would otherwise put a picture or a
-    # widget of this plotter in the cell, besides the movie asked for.
-    with deferred():  # a signal inside VTK's module set-up crashed the process
-        import pyvista as pv
+            from pvcloth.visual.gl import use_offscreen_gl_if_headless
 
-        from pvcloth.visual.view import use_offscreen_gl_if_headless
-
-        use_offscreen_gl_if_headless()
-        plotter = pv.Plotter(
-            off_screen=True, notebook=False, window_size=list(size), **(layout or {})
-        )
-    writer = None
-    # Only the physics is interrupted at once: a Ctrl-C or SIGTERM that comes
-    # while VTK draws (which would swallow it), or while a frame is appended
-    # or the file finished, takes effect when that step is done.
-    try:
-        with deferred():
-            update, status = build(plotter)
-            # FXAA instead of PyVista's default 4x MSAA: 640x480 drape frame
-            # 30 ms against 49 ms under Mesa (15.6 ms with neither). Set on
-            # VTK directly: PyVista swaps FXAA for the costlier SSAA under
-            # EGL, though VTK's FXAA pass draws there (checked on pictures).
-            plotter.render_window.SetMultiSamples(0)
-            for renderer in plotter.renderers:
-                renderer.SetUseFXAA(bool(antialias))
-            plotter.show(auto_close=False)
-            writer = _FrameWriter(partial, fps, stats.notes)
-        bar = frame_bar(frame_numbers, frames, f"rendering {path.name}", enabled=progress)
-        t0 = time.perf_counter()
-        for _ in bar:  # each frame's physics runs inside the loop's next()
-            t1 = time.perf_counter()
+            use_offscreen_gl_if_headless()
+            plotter = pv.Plotter(
+                off_screen=True, notebook=False, window_size=list(size), **(layout or {})
+            )
+        writer = None
+        # Only the physics is interrupted at once: a Ctrl-C or SIGTERM that comes
+        # while VTK draws (which would swallow it), or while a frame is appended
+        # or the file finished, takes effect when that step is done.
+        try:
             with deferred():
-                update()
-                plotter.render()
-                image = plotter.screenshot(return_img=True)
-                t2 = time.perf_counter()
-                writer.append(image)
-                stats.frames += 1
-            t3 = time.perf_counter()
-            stats.physics.append(t1 - t0)
-            stats.drawing.append(t2 - t1)
-            stats.encoding.append(t3 - t2)
-            bar.set_postfix_str(status())
+                update, status = build(plotter)
+                # FXAA instead of PyVista's default 4x MSAA: 640x480 drape frame
+                # 30 ms against 49 ms under Mesa (15.6 ms with neither). Set on
+                # VTK directly: PyVista swaps FXAA for the costlier SSAA under
+                # EGL, though VTK's FXAA pass draws there (checked on pictures).
+                plotter.render_window.SetMultiSamples(0)
+                for renderer in plotter.renderers:
+                    renderer.SetUseFXAA(bool(antialias))
+                plotter.show(auto_close=False)
+                writer = _FrameWriter(output.temporary, fps, stats.notes)
+            bar = frame_bar(frame_numbers, frames, f"rendering {path.name}", enabled=progress)
             t0 = time.perf_counter()
-        with deferred():
-            t0 = time.perf_counter()
-            writer.close()
-            stats.closing = time.perf_counter() - t0
-            writer = None
-            os.replace(partial, path)
-        return stats
-    except (Exception, KeyboardInterrupt) as error:
-        with deferred(then_raise=False):  # the run is stopping already: finish the salvage
-            interrupted = _salvage(writer, partial, path, stats.frames, error)
-        raise interrupted from error
-    finally:
-        with deferred(then_raise=False):
-            plotter.close()
+            for _ in bar:  # each frame's physics runs inside the loop's next()
+                t1 = time.perf_counter()
+                with deferred():
+                    update()
+                    plotter.render()
+                    image = plotter.screenshot(return_img=True)
+                    t2 = time.perf_counter()
+                    writer.append(image)
+                    stats.frames += 1
+                t3 = time.perf_counter()
+                stats.physics.append(t1 - t0)
+                stats.drawing.append(t2 - t1)
+                stats.encoding.append(t3 - t2)
+                bar.set_postfix_str(status())
+                t0 = time.perf_counter()
+            with deferred():
+                t0 = time.perf_counter()
+                writer.close()
+                stats.closing = time.perf_counter() - t0
+                writer = None
+                output.publish()
+            return stats
+        except (Exception, KeyboardInterrupt) as error:
+            with deferred(then_raise=False):  # the run is stopping already: finish the salvage
+                interrupted = _salvage(writer, output, stats.frames, error)
+            raise interrupted from error
+        finally:
+            with deferred(then_raise=False):
+                plotter.close()
 
 
-def _salvage(writer, partial: Path, path: Path, done: int, error) -> MovieInterrupted:
-    """Close what was written; keep it if it holds a frame, else delete it."""
+def _salvage(writer, output: Staged, done: int, error) -> MovieInterrupted:
+    """Close what was written and publish it if it holds a frame; otherwise
+    it is left for ``output`` to remove."""
     reason = "interrupted" if isinstance(error, KeyboardInterrupt) else str(error)
+    path = output.path
     if writer is not None and done > 0:
         try:
             writer.close()
-            os.replace(partial, path)
+            output.publish()
             return MovieInterrupted(
                 f"stopped after {done} frame(s): {reason}\n"
                 f"kept a valid {path.suffix[1:].upper()} of those frames in {path}",
@@ -377,7 +377,6 @@ def _salvage(writer, partial: Path, path: Path, done: int, error) -> MovieInterr
             )
         except Exception:  # the writer itself failed: keep nothing
             pass
-    partial.unlink(missing_ok=True)
     return MovieInterrupted(
         f"stopped before any frame was finished: {reason}\nno file written", None, done
     )

@@ -264,8 +264,7 @@ class PhysicsThread:
         calm = [kept for kept in self._kept if kept[2] <= CALM_SPEED]
         if calm or self._kept:
             state, steps, _ = (calm or list(self._kept))[0 if not calm else -1]
-            sim.state, sim.steps = state, steps
-            sim.update_mesh()
+            sim.set_state(state.x, state.v, state.t, steps=steps)
         self._kept.clear()
         self.paused = True
         self.drag = None

@@ -107,9 +107,9 @@ class BackwardEuler(Integrator):
         x, v = state.x, state.v
         table = model.spring_table()
         # The pattern depends only on the springs' ends, which never change
-        # for a model; a new table (a live edit of the constants) rebuilds it.
-        if self._pattern is None or self._pattern[0] != id(table):
-            self._pattern = (id(table), BlockPattern(table.a, table.b, model.n_points))
+        # for a model: kept until another model comes.
+        if self._pattern is None or self._pattern[0] != model.serial:
+            self._pattern = (model.serial, BlockPattern(table.a, table.b, model.n_points))
         # Explicit drift as the start (a start from the last step's change
         # of velocity was measured to save nothing); pinned points where the
         # simulation sends them (it set their velocity).
@@ -176,7 +176,7 @@ class _StepPotential:
         self.model, self.x, self.dt, self.inv_mass, self.pattern = model, x, dt, inv_mass, pattern
         self.a, self.b = table.a, table.b
         self.drift = x + dt * v  # (N, 3) m
-        self.rate = model.air.rate if model.air is not None else 0.0  # 1/s
+        self.rate = model.air_rate  # 1/s
         # Spring and dashpot as one spring (see the class docstring).
         start = np.linalg.norm(x[table.b] - x[table.a], axis=1)
         viscous = table.damping / dt
@@ -187,19 +187,19 @@ class _StepPotential:
             table.rest,
         )  # (S,) m
         self.gravity = np.zeros_like(x)  # (N, 3) N
-        if model.gravity is not None:
-            model.gravity.accumulate(x, v, self.gravity)
+        model.add_gravity(x, v, self.gravity)
         self.constant = self.gravity.copy()  # gravity, plus the wind at the anchor
         self._anchored_at: np.ndarray | None = None
 
     def anchor(self, t: np.ndarray) -> bool:
         """Take the wind at ``t``; whether that changed ``Psi`` (never without
         wind, or when ``t`` is the anchor already)."""
-        wind = self.model.wind
-        if wind is None or (self._anchored_at is not None and np.array_equal(t, self._anchored_at)):
+        if self._anchored_at is not None and np.array_equal(t, self._anchored_at):
             return False
-        self.constant = self.gravity.copy()
-        wind.accumulate(t, (t - self.x) / self.dt, self.constant)
+        constant = self.gravity.copy()
+        if not self.model.add_wind(t, (t - self.x) / self.dt, constant):
+            return False
+        self.constant = constant
         self._anchored_at = t.copy()
         return True
 

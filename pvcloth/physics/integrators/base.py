@@ -65,6 +65,11 @@ class Integrator(ABC):
         Whether a step costs more when its length differs from the last
         (it factorises a matrix that depends on the step): adaptive runs then
         change its step only when worth it (:mod:`pvcloth.physics.adaptive`).
+    check : tuple of (float, bool) or None
+        ``(largest speed in m/s, every value finite)`` of the state the
+        last step made, when the step found them on its way (the compiled
+        symplectic step does), so the divergence guard need not look again;
+        ``None`` otherwise.
     uses_blas : bool
         Whether its step calls BLAS (linear solves, long dot products): the
         simulation then holds BLAS to one thread around it
@@ -81,6 +86,7 @@ class Integrator(ABC):
     uses_blas: bool = False
     embedded: bool = False
     steady_steps: bool = False
+    check: tuple[float, bool] | None = None
     _forces: np.ndarray | None = None  # reused (N, 3) force buffer, newtons
 
     @staticmethod

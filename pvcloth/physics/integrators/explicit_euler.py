@@ -35,5 +35,5 @@ class ExplicitEuler(Integrator):
         new.x += state.x
         np.multiply(a, dt, out=new.v)
         new.v += state.v
-        new.t, new.checked = state.t + dt, None
+        new.t = state.t + dt
         return new

@@ -90,8 +90,9 @@ class FastMassSpring(Integrator):
 
     def _prepare(self, model: Model, control: Control, dt: float) -> _Factor:
         # Rebuilt when the step, a spring constant (model.revision) or the
-        # pinned set (control.revision) changed: integers, no array compared.
-        key = (dt, id(model), model.revision, id(control), control.revision)
+        # pinned set (control.revision) changed: revisions are never reused,
+        # by another model or control either, so no array is compared.
+        key = (dt, model.revision, control.revision)
         factor = self._factors.pop(key, None)
         if factor is None:
             factor = _factorise(model, control, dt)
@@ -114,8 +115,7 @@ class FastMassSpring(Integrator):
         factor = self._prepare(model, control, dt)
         x, v = state.x, state.v
         other = np.zeros_like(x)
-        for term in model.other_forces:
-            term.accumulate(x, v, other)
+        model.add_other_forces(x, v, other)
         y = x + dt * v + dt * dt * other * control.inv_mass[:, None]
         fixed = factor.fixed
         pinned_next = x[fixed] + dt * v[fixed]  # the simulation set their velocity

@@ -30,6 +30,6 @@ class SymplecticEuler(Integrator):
     ) -> State:
         f = self.forces(model, state)
         new = reuse_or_allocate(out, state)
-        new.checked = model.kick_drift(state.x, state.v, f, control.inv_mass, dt, new.x, new.v)
+        self.check = model.kick_drift(state.x, state.v, f, control.inv_mass, dt, new.x, new.v)
         new.t = state.t + dt
         return new

@@ -48,7 +48,6 @@ class VelocityVerlet(Integrator):
         np.multiply(scale, f, out=kick)
         half += kick
         new.t = state.t + dt
-        new.checked = None
         return new
 
     def _buffers(self, like: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
