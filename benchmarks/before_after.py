@@ -12,13 +12,14 @@ The cases are the three speed tables of the project, each cut to its core:
 - **step** (``benchmarks/cpu_speed.py``): ``Simulation.step()`` of every
   integrator on the hanging cloth at 64x64, at a step all can take;
 - **frame** (``benchmarks/fabric_speed.py``): ``advance(1 / 60)`` of the
-  frame-step methods on the cotton scene at 64x64;
+  frame-step methods on the cotton scene at 64x64 (not ``backward_euler``:
+  seconds a frame there);
 - **contact** (``benchmarks/self_collision_cost.py``): ``advance(1 / 60)``
   of the crumple scene at 32x32 with ``[self_collision]`` on and off, after
-  0.3 s of falling, and of the folded towel at 32x32 resting on itself.
+  0.3 s of falling.
 
-Run:  python benchmarks/before_after.py BEFORE [AFTER] [--rounds 9]
-      [--out FILE]
+Run:  python benchmarks/before_after.py BEFORE [AFTER] [--rounds 7] [--batch 0.2]
+      [--grid N] [--out FILE]
 
 ``BEFORE`` and ``AFTER`` are git commits of this repository (``AFTER``
 defaults to the working tree); each is checked out into a temporary folder
@@ -59,7 +60,7 @@ CASES = [
     ),
     *(
         (f"frame {name}", "cotton.toml", 64, name, 1 / 60, None, 0.2, "frame")
-        for name in ("fast_mass_spring", "backward_euler", "implicit_euler")
+        for name in ("fast_mass_spring", "implicit_euler")
     ),
     ("contact crumple on", "crumple.toml", 32, None, None, True, 0.3, "frame"),
     ("contact crumple off", "crumple.toml", 32, None, None, False, 0.3, "frame"),
@@ -69,23 +70,28 @@ CASES = [
 WORKER = r"""
 import json, sys, time
 import pvcloth
+def call(sim, kind):
+    sim.step() if kind == "step" else sim.advance(1 / 60)
 sims = {}
 for line in sys.stdin:
     ask = json.loads(line)
     if ask["do"] == "build":
-        name, scene_file, n, integrator, dt, contact, warm, call = ask["case"]
+        name, scene_file, n, integrator, dt, contact, warm, kind = ask["case"]
         scene = pvcloth.load_scene(scene_file).with_resolution(n)
         if contact is False:
             scene = scene.replace(self_collision=None)
         sim = pvcloth.Simulation(scene, integrator=integrator, dt=dt, stability="ignore")
         sim.advance(warm)
-        sims[name] = (sim, call)
-        answer = {"dt": sim.dt, "module": pvcloth.__file__}
+        sims[name] = (sim, kind)
+        start = time.perf_counter()
+        call(sim, kind)
+        answer = {"dt": sim.dt, "module": pvcloth.__file__, "once": time.perf_counter() - start}
     else:
-        sim, call = sims[ask["case"]]
+        sim, kind = sims[ask["case"]]
+        time.sleep(0.2)  # the other worker's threads go quiet first
         start = time.perf_counter()
         for _ in range(ask["calls"]):
-            sim.step() if call == "step" else sim.advance(1 / 60)
+            call(sim, kind)
         answer = {"seconds": (time.perf_counter() - start) / ask["calls"]}
     print(json.dumps(answer), flush=True)
 """
@@ -95,7 +101,9 @@ class Worker:
     """One process running one checkout of pvcloth."""
 
     def __init__(self, tree: Path):
-        environment = dict(os.environ, PYTHONPATH=str(tree))
+        # Passive OpenMP threads: a worker's threads would otherwise spin on
+        # the cores for a while after each step, while the other one is timed.
+        environment = dict(os.environ, PYTHONPATH=str(tree), OMP_WAIT_POLICY="PASSIVE")
         self.process = subprocess.Popen(
             [sys.executable, "-c", WORKER],
             cwd=tree / "data" / "scenes",
@@ -130,6 +138,17 @@ def checkout(commit: str, folder: Path) -> Path:
     return folder
 
 
+def cpu_model() -> str:
+    """The CPU's name as Linux gives it (the architecture elsewhere)."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.machine()
+
+
 def short(commit: str) -> str:
     if Path(commit).is_dir():
         return Path(commit).name
@@ -146,8 +165,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("before", help="the commit measured first (e.g. before a refactor)")
     parser.add_argument("after", nargs="?", help="the commit after (default: the working tree)")
-    parser.add_argument("--rounds", type=int, default=9)
-    parser.add_argument("--calls", type=int, default=5, help="calls timed per case and round")
+    parser.add_argument("--rounds", type=int, default=7)
+    parser.add_argument(
+        "--batch", type=float, default=0.2, help="seconds of calls timed per case and round"
+    )
     parser.add_argument("--grid", type=int, help="every case at this many points per side")
     parser.add_argument("--out", type=Path, default=HERE / "results" / "before_after.md")
     args = parser.parse_args()
@@ -166,10 +187,12 @@ def main() -> None:
                 made.append(trees[-1])
         workers = [Worker(tree) for tree in trees]
         try:
-            steps = {}
+            steps, calls = {}, {}
             for case in cases:
                 answers = [worker.ask(do="build", case=case) for worker in workers]
                 steps[case[0]] = answers[0]["dt"]
+                once = max(answer["once"] for answer in answers)
+                calls[case[0]] = max(1, round(args.batch / once))
                 if answers[0]["module"] == answers[1]["module"] and trees[0] != trees[1]:
                     raise RuntimeError(f"both workers imported {answers[0]['module']}")
                 if answers[0]["dt"] != answers[1]["dt"]:
@@ -180,7 +203,8 @@ def main() -> None:
                 order = workers if round_ % 2 == 0 else workers[::-1]
                 for case in cases:
                     for worker in order:
-                        seconds = worker.ask(do="time", case=case[0], calls=args.calls)["seconds"]
+                        asked = worker.ask(do="time", case=case[0], calls=calls[case[0]])
+                        seconds = asked["seconds"]
                         times[case[0]][workers.index(worker)].append(seconds)
                 print(f"round {round_ + 1} of {args.rounds}", flush=True)
         finally:
@@ -199,7 +223,7 @@ def main() -> None:
             f"| {case[0]} | {case[2]}x{case[2]} | {steps[case[0]]:.3g} | {1e3 * before:.3f} "
             f"| {1e3 * after:.3f} | {after / before:.2f} |"
         )
-    machine = f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+    machine = f"{cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}"
     text = "\n".join(
         [
             f"# Before and after: {labels[0]} against {labels[1]}",
@@ -207,9 +231,11 @@ def main() -> None:
             f"`python benchmarks/before_after.py {labels[0]}"
             + (f" {labels[1]}" if args.after else "")
             + (f" --grid {args.grid}" if args.grid else "")
-            + f" --rounds {args.rounds} --calls {args.calls}` on {machine}. Median of "
-            f"{args.rounds} rounds of {args.calls} calls, the commits taking turns within each "
-            "round; ms per call (`step()`, or `advance(1 / 60)` for frames).",
+            + f" --rounds {args.rounds} --batch {args.batch}` on {machine}. Median of "
+            f"{args.rounds} rounds, each timing about {args.batch} s of calls (at least one) per "
+            "case and commit, the commits taking turns; ms per call (`step()`, or "
+            "`advance(1 / 60)` for frames). OpenMP threads passive, so the idle worker's "
+            "do not spin while the other is timed.",
             "",
             f"| case | grid | dt (s) | {labels[0]} (ms) | {labels[1]} (ms) | after / before |",
             "|---|---|---|---|---|---|",

@@ -26,7 +26,7 @@ RUNS = {
     "blas_threads.py": ([], "blas_threads.md"),
     # the copy (no .git) against itself, in place of two commits
     "before_after.py": (
-        [".", ".", "--grid", "8", "--rounds", "1", "--calls", "1"],
+        [".", ".", "--grid", "8", "--rounds", "1", "--batch", "0.01"],
         "before_after.md",
     ),
     "cpu_speed.py": (["--sizes", "8", "--rounds", "1"], "cpu_speed.md"),

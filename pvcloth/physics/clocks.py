@@ -52,7 +52,7 @@ class Clocks:
         if n == 0:
             return
         pinned = self.control.pinned_index
-        start = self.state.x[pinned].copy()
+        start = self._state.x[pinned].copy()
         goal = self.control.targets[pinned].copy()
         try:
             with self._one_pool():
@@ -138,16 +138,16 @@ class Clocks:
         rejected ones are retried shorter and leave no trace."""
         control = self.controller
         steady = self.integrator.steady_steps
-        end = self.state.t + seconds
+        end = self._state.t + seconds
         pinned = self.control.pinned_index
-        start_time = self.state.t
-        start = self.state.x[pinned].copy()
+        start_time = self._state.t
+        start = self._state.x[pinned].copy()
         goal = self.control.targets[pinned].copy()
         try:
-            while self.state.t < end - 1e-12 * max(1.0, end):
+            while self._state.t < end - 1e-12 * max(1.0, end):
                 if control.step < control.min_step:
                     raise DivergenceError(
-                        f"simulation stopped at t = {self.state.t:.6g} s: {self.integrator.name}"
+                        f"simulation stopped at t = {self._state.t:.6g} s: {self.integrator.name}"
                         f" needed steps under {control.min_step:g} s (solver.min_dt) to keep "
                         f"its error under {control.tolerance:g} m per second; the step had "
                         f"fallen to {control.step:.3g} s. A blow-up, or a tolerance too tight "
@@ -155,7 +155,7 @@ class Clocks:
                         f"try an implicit integrator"
                     )
                 natural = control.step
-                remaining = end - self.state.t
+                remaining = end - self._state.t
                 if steady and control.taken > 0.0:
                     # Keep the step (and its factorisation) unless worth changing.
                     h = steady_step(natural, control.taken, remaining)
@@ -163,7 +163,7 @@ class Clocks:
                     h = min(natural, remaining)
                     if remaining - h < 1e-9 * h:  # no sliver of a step left over
                         h = remaining
-                share = (self.state.t + h - start_time) / seconds
+                share = (self._state.t + h - start_time) / seconds
                 if self._substep(pinned, start + (goal - start) * share, dt=h):
                     if h < natural:
                         # Cut short to land on the end, not for its error:
