@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from provenance import provenance
 from smoke import SMOKE
 
 import pvcloth
@@ -115,6 +116,8 @@ def main() -> None:
         )
     lines = [
         "# Adaptive steps against fixed ones",
+        "",
+        provenance(),
         "",
         f"`{' '.join(['python benchmarks/adaptive.py', *sys.argv[1:]])}`: each method with "
         "`solver.tolerance` (adaptive) and at fixed steps; error = the largest, over the "

@@ -41,6 +41,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from provenance import cpu_name
+
 HERE = Path(__file__).parent
 ROOT = HERE.parent
 
@@ -138,17 +140,6 @@ def checkout(commit: str, folder: Path) -> Path:
     return folder
 
 
-def cpu_model() -> str:
-    """The CPU's name as Linux gives it (the architecture elsewhere)."""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.machine()
-
-
 def short(commit: str) -> str:
     if Path(commit).is_dir():
         return Path(commit).name
@@ -223,7 +214,7 @@ def main() -> None:
             f"| {case[0]} | {case[2]}x{case[2]} | {steps[case[0]]:.3g} | {1e3 * before:.3f} "
             f"| {1e3 * after:.3f} | {after / before:.2f} |"
         )
-    machine = f"{cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+    machine = f"{cpu_name()}, {os.cpu_count()} cores, Python {platform.python_version()}"
     text = "\n".join(
         [
             f"# Before and after: {labels[0]} against {labels[1]}",

@@ -20,6 +20,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from provenance import provenance
 from smoke import SMOKE
 from threadpoolctl import threadpool_info
 
@@ -83,6 +84,8 @@ def main() -> None:
     )
     lines = [
         "# BLAS threads beside the kernels' threads",
+        "",
+        provenance(),
         "",
         f"`python benchmarks/blas_threads.py`: hanging scene, dt = 1/240 s, {rounds} interleaved "
         f"rounds of {STEPS_PER_ROUND} steps per arm. *held*: pvcloth's default, every BLAS "

@@ -23,6 +23,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from provenance import provenance
 
 import pvcloth
 from pvcloth.physics.kernels import threading_layer
@@ -161,6 +162,8 @@ def write(results, checks, rounds, have_taichi, out: Path, arguments: list[str])
     command = " ".join(["python benchmarks/cpu_speed.py", *arguments])
     lines = [
         "# CPU step speed: pvcloth and Taichi side by side",
+        "",
+        provenance(),
         "",
         f"`{command}` on {platform.node()} ({os.cpu_count()} cores), "
         f"Python {platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}"

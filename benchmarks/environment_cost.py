@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from provenance import provenance
 from smoke import SMOKE
 
 import pvcloth
@@ -69,6 +70,8 @@ def main() -> None:
             print(rows[-1])
     lines = [
         "# What wind and obstacles cost",
+        "",
+        provenance(),
         "",
         f"`python benchmarks/environment_cost.py` on {platform.node()}, numpy "
         f"{np.__version__}. Hanging scene, symplectic Euler at the scene's step; median of "

@@ -37,6 +37,7 @@ import sys
 import time
 from pathlib import Path
 
+from provenance import provenance
 from smoke import SMOKE
 
 import pvcloth
@@ -143,6 +144,8 @@ def main() -> None:
             print({"n": n, "dashpot gap": gaps[n]}, flush=True)
     lines = [
         "# Real fabric at frame steps",
+        "",
+        provenance(),
         "",
         f"`python benchmarks/fabric_speed.py{''.join(' ' + a for a in sys.argv[1:])}` on "
         f"{platform.node()}: the cotton scene "

@@ -25,6 +25,7 @@ from pathlib import Path
 import numba
 import numpy as np
 from numba import prange
+from provenance import provenance
 from smoke import SMOKE
 
 from pvcloth.physics import kernels
@@ -95,6 +96,8 @@ def main() -> None:
             print(f"{n:4d}  {name:<36} {ms:8.4f} ms  finds NaN: {found[name]}")
     lines = [
         "# Finiteness check in the compiled update",
+        "",
+        provenance(),
         "",
         f"`python benchmarks/finite_check.py` on {platform.node()} (serial builds), median of "
         f"{ROUNDS} rounds of {CALLS} calls, builds interleaved.",

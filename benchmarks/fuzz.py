@@ -21,6 +21,8 @@ import sys
 import time
 from pathlib import Path
 
+from provenance import provenance
+
 HERE = Path(__file__).parent
 ROOT = HERE.parent
 
@@ -54,6 +56,8 @@ def main() -> None:
     summary = output.strip().splitlines()[-1] if output.strip() else result.stderr[-300:]
     lines = [
         "# Fuzzing",
+        "",
+        provenance(),
         "",
         f"`python benchmarks/fuzz.py --examples {args.examples}` on {platform.node()}: "
         f"{total:,} generated cases in {wall:.0f} s; pytest says: `{summary}`.",

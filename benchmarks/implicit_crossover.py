@@ -29,6 +29,8 @@ import platform
 import time
 from pathlib import Path
 
+from provenance import provenance
+
 import pvcloth
 from pvcloth.physics.reference import rms_distance
 
@@ -119,6 +121,8 @@ def main() -> None:
             print(rows[-1])
     lines = [
         "# Implicit Euler against the best explicit method",
+        "",
+        provenance(),
         "",
         f"`python benchmarks/implicit_crossover.py` on {platform.node()}: hanging scene, all "
         "spring stiffnesses and dampings scaled together; explicit methods at 0.9 of their "

@@ -29,6 +29,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from provenance import provenance
 
 import pvcloth
 from pvcloth.visual.interaction import world_to_display
@@ -119,6 +120,8 @@ def main() -> None:
             print(rows[-1], flush=True)
     lines = [
         "# The interactive window, by the wall clock",
+        "",
+        provenance(),
         "",
         '`xvfb-run -a -s "-screen 0 1280x1024x24" python benchmarks/interactive_fps.py'
         f"{''.join(' ' + a for a in sys.argv[1:])}`: "

@@ -17,6 +17,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from provenance import provenance
 from smoke import SMOKE
 
 HERE = Path(__file__).parent
@@ -69,6 +70,8 @@ def main() -> None:
             print(rows[-1])
     lines = [
         "# Memory",
+        "",
+        provenance(),
         "",
         "`python benchmarks/memory.py`: hanging scene, compiled backend, 2,000 steps. Traced = "
         "Python and NumPy allocations (tracemalloc) after building the simulation, after "

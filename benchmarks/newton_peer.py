@@ -41,6 +41,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from provenance import provenance
 from smoke import SMOKE
 
 import pvcloth
@@ -198,6 +199,8 @@ def main() -> None:
         versions = f" (Newton {newton.__version__}, Warp {wp.__version__}, CPU)"
     lines = [
         "# pvcloth and NVIDIA Newton on the same cotton cloth",
+        "",
+        provenance(),
         "",
         f"`python benchmarks/newton_peer.py{''.join(' ' + a for a in sys.argv[1:])}` on "
         f"{platform.node()}{versions}: the cotton scene at {n}x{n} points, "

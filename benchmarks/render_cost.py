@@ -17,6 +17,7 @@ import tempfile
 from pathlib import Path
 
 import pyvista
+from provenance import provenance
 
 import pvcloth
 from pvcloth.visual.movie import render
@@ -55,6 +56,8 @@ def main() -> None:
                     print(rows[-1])
     lines = [
         "# Rendering cost per frame",
+        "",
+        provenance(),
         "",
         f"`python benchmarks/render_cost.py --frames {args.frames}` on {platform.node()} "
         f"({platform.machine()}), pyvista {pyvista.__version__}, "

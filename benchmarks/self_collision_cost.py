@@ -33,6 +33,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from provenance import provenance
 
 HERE = Path(__file__).parent
 ROOT = HERE.parent
@@ -125,6 +126,8 @@ def main() -> None:
             print(f"{n} {name}: off {t_off * 1e3:.2f} ms, on {t_on * 1e3:.2f} ms", flush=True)
     lines = [
         "# Self-collision: step time on against off",
+        "",
+        provenance(),
         "",
         f"`python benchmarks/self_collision_cost.py --sizes {' '.join(map(str, args.sizes))} "
         f"--cases {' '.join(args.cases)} --steps {args.steps} --settle {args.settle:g} "

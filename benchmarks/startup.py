@@ -18,6 +18,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+from provenance import provenance
 from smoke import SMOKE
 
 HERE = Path(__file__).parent
@@ -81,6 +82,8 @@ def main() -> None:
             )
     lines = [
         "# Start-up",
+        "",
+        provenance(),
         "",
         "`python benchmarks/startup.py`: fresh processes, median of 5, seconds. The first "
         "frame is building the hanging scene (32x32, its stable-step check included) and "

@@ -21,6 +21,7 @@ import time
 import tracemalloc
 from pathlib import Path
 
+from provenance import provenance
 from smoke import SMOKE
 
 import pvcloth
@@ -73,6 +74,8 @@ def main() -> None:
             print(n, name, fresh, reused, flush=True)
     lines = [
         "# Fresh memory per step",
+        "",
+        provenance(),
         "",
         f"`python benchmarks/step_allocations.py` on {platform.node()} "
         f"({platform.processor() or platform.machine()}): hanging scene, compiled backend, "

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 from dask.distributed import Client, LocalCluster
+from provenance import provenance
 from smoke import SMOKE
 
 import pvcloth
@@ -60,6 +61,8 @@ def main() -> None:
     base = rows[0][3]
     lines = [
         "# Sweep speed-up on local Dask workers",
+        "",
+        provenance(),
         "",
         f"`python benchmarks/sweep_scaling.py` on {platform.node()} ({os.cpu_count()} cores): "
         f"{' '.join('--set ' + s for s in SETS)} on the hanging scene at 12x12, "

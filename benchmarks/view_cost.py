@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 import pyvista
+from provenance import provenance
 from smoke import SMOKE
 
 import pvcloth
@@ -81,6 +82,8 @@ def main() -> None:
     command = " ".join(["python benchmarks/view_cost.py", *sys.argv[1:]])
     lines = [
         "# What each look costs to draw",
+        "",
+        provenance(),
         "",
         f"`{command}` on {platform.node()}, pyvista {pyvista.__version__}, off-screen EGL "
         f"(Mesa llvmpipe, software GL), FXAA on, hanging scene, {frames} frames per row. "
