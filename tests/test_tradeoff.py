@@ -141,3 +141,26 @@ def test_implicit_errors_split_into_time_and_solver_parts():
     for dt in (round(1 / 60, 6), round(1 / 240, 6)):
         assert many["fast_mass_spring", dt].solver_error < few["fast_mass_spring", dt].solver_error
     assert "of which: time (m)" in table(list(few.values()))
+
+
+def test_the_plot_tells_every_integrator_apart_labels_steps_and_marks_the_front():
+    from matplotlib.colors import to_rgb
+
+    from pvcloth.studies.tradeoff import Run, draw
+
+    names = sorted(INTEGRATORS)
+    runs = [
+        Run(name, dt, True, 1e-3 * (n + 1) * dt * 60, 0.0, 0.1 * (n + 1) / (dt * 60), 60)
+        for n, name in enumerate(names)
+        for dt in (1 / 60, 1 / 120, 1 / 240)
+    ]
+    ax = draw(runs, "test").axes[0]
+    lines = {line.get_label(): line for line in ax.lines}
+    looks = [(to_rgb(lines[name].get_color()), lines[name].get_marker()) for name in names]
+    assert len(set(looks)) == len(names)  # no two integrators alike
+    assert len({colour for colour, _ in looks}) == len(names)  # not even by colour alone
+    greys = [c for c, _ in looks if max(c) - min(c) < 0.05]
+    assert not greys  # grey is the front's and the guides' colour
+    labels = {text.get_text() for text in ax.texts}
+    assert {"1/60 s", "1/240 s"} <= labels
+    assert any("Pareto front" in label for label in lines)

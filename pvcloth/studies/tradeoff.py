@@ -187,29 +187,95 @@ def write_csv(runs: list[Run], path: Path) -> None:
             writer.writerow(asdict(run))
 
 
+#: One colour and one marker per integrator, in the order of their names:
+#: matplotlib's ten colours without its grey (C7), which the Pareto front and
+#: the guide lines use, so no integrator reads as one of them.
+PLOT_COLORS = ("C0", "C1", "C2", "C3", "C4", "C5", "C6", "C8", "C9")
+PLOT_MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*", "h")
+
+
+def step_label(dt: float) -> str:
+    """A step as a student reads it: ``1/60`` for a fraction of a second with a
+    whole denominator, else seconds in short form.
+
+    Examples
+    --------
+    >>> step_label(1 / 60), step_label(3e-4), step_label(0.01)
+    ('1/60 s', '3.0e-04 s', '1/100 s')
+    """
+    denominator = 1.0 / dt
+    if abs(denominator - round(denominator)) < 1e-6 * denominator and denominator <= 10000:
+        return f"1/{round(denominator)} s"
+    return f"{dt:.1e} s"
+
+
 def plot(runs: list[Run], path: Path, title: str) -> None:
-    """Error against cost, one marker per integrator, the Pareto front as a
-    line, unstable runs as crosses along the top."""
+    """Save :func:`draw`'s figure to ``path`` (PNG, SVG, PDF: by its suffix)."""
+    draw(runs, title).savefig(path)
+
+
+def draw(runs: list[Run], title: str):
+    """The trade-off figure (a ``matplotlib.figure.Figure``). Error against
+    cost: each integrator in its own colour and marker, its
+    fixed steps joined and the largest and smallest labelled, adaptive runs
+    dashed with open markers, unstable runs as crosses along the top, and the
+    Pareto front as a thick grey band with its runs ringed."""
     # A Figure of its own, drawn by Agg when saved: no pyplot, so the
     # caller's matplotlib backend (a notebook's) is left as it was.
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(8.4, 4.5), dpi=110)
+    fig = Figure(figsize=(8.8, 4.8), dpi=110)
     ax = fig.subplots()
     stable = [r for r in runs if r.stable]
     ceiling = 3 * max((r.rms_error for r in stable), default=1.0)
+    front = pareto_front(runs)
+    ax.step(
+        [r.wall_per_sim_second for r in front],
+        [r.rms_error for r in front],
+        where="post",
+        color="0.55",
+        lw=7,
+        alpha=0.35,
+        solid_capstyle="round",
+        label="Pareto front (best error for the cost)",
+        zorder=1,
+    )
+    ax.plot(
+        [r.wall_per_sim_second for r in front],
+        [r.rms_error for r in front],
+        "o",
+        markersize=14,
+        markerfacecolor="none",
+        markeredgecolor="0.35",
+        markeredgewidth=1.2,
+        zorder=2,
+    )
     for n, name in enumerate(sorted({r.integrator for r in runs})):
-        color = f"C{n}"
-        ok = [r for r in stable if r.integrator == name and not r.adaptive]
+        color = PLOT_COLORS[n % len(PLOT_COLORS)]
+        marker = PLOT_MARKERS[n % len(PLOT_MARKERS)]
+        ok = sorted(
+            (r for r in stable if r.integrator == name and not r.adaptive), key=lambda r: r.dt
+        )
         bad = [r for r in runs if r.integrator == name and not r.stable]
         ax.plot(
             [r.wall_per_sim_second for r in ok],
             [r.rms_error for r in ok],
-            "o-",
+            marker=marker,
+            ls="-",
             color=color,
             label=name,
-            alpha=0.85,
+            alpha=0.9,
+            zorder=3,
         )
+        for run in {id(r): r for r in (ok[:1] + ok[-1:])}.values():  # the largest and smallest step
+            ax.annotate(
+                step_label(run.dt),
+                (run.wall_per_sim_second, run.rms_error),
+                xytext=(5, 4),
+                textcoords="offset points",
+                fontsize=7,
+                color=color,
+            )
         chosen = sorted(
             (r for r in stable if r.integrator == name and r.adaptive), key=lambda r: r.tolerance
         )
@@ -217,11 +283,13 @@ def plot(runs: list[Run], path: Path, title: str) -> None:
             ax.plot(
                 [r.wall_per_sim_second for r in chosen],
                 [r.rms_error for r in chosen],
-                "D--",
+                marker=marker,
+                ls="--",
                 color=color,
                 markerfacecolor="white",
                 label=f"{name}, adaptive",
-                alpha=0.85,
+                alpha=0.9,
+                zorder=3,
             )
         if bad:
             ax.plot(
@@ -230,22 +298,13 @@ def plot(runs: list[Run], path: Path, title: str) -> None:
                 "x",
                 color=color,
                 markersize=9,
+                zorder=3,
             )
-    front = pareto_front(runs)
-    ax.step(
-        [r.wall_per_sim_second for r in front],
-        [r.rms_error for r in front],
-        where="post",
-        color="k",
-        lw=2.5,
-        alpha=0.35,
-        label="Pareto front",
-    )
     ax.axhline(ceiling, color="grey", lw=0.5, ls=":")
     ax.text(
         min(r.wall_per_sim_second for r in runs),
         ceiling,
-        " x = unstable (diverged)",
+        " x = unstable (diverged); labels: the step",
         va="bottom",
         fontsize=8,
         color="grey",
@@ -259,7 +318,7 @@ def plot(runs: list[Run], path: Path, title: str) -> None:
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     ax.grid(True, which="both", alpha=0.2)
     fig.tight_layout()
-    fig.savefig(path)
+    return fig
 
 
 def table(runs: list[Run]) -> str:
