@@ -13,8 +13,9 @@ from conftest import ROOT
 from pvcloth import SelfCollisionSpec, Simulation, load_scene
 
 SCENES = ROOT / "data" / "scenes"
-sys.path.insert(0, str(ROOT / "examples"))
-from fold_a_towel import fold_a_towel  # noqa: E402
+# The towel is the gallery's (examples/03_self_collision/towel_helpers.py).
+sys.path.insert(0, str(ROOT / "examples" / "03_self_collision"))
+from towel_helpers import fold_a_towel  # noqa: E402
 
 
 def _with_contact(scene, n: int, integrator: str, contact: bool):
@@ -94,7 +95,7 @@ def twist(n: int, integrator: str, contact: bool = True):
 
 
 def towel_fold(n: int, integrator: str, contact: bool = True):
-    """The towel of ``examples/fold_a_towel.py``: a cloth on the floor folded
+    """The towel of ``examples/03_self_collision/towel_helpers.py``: a cloth on the floor folded
     in half by its left edge in 1 s, then let go to settle on itself."""
     return fold_a_towel(n, integrator, contact)
 

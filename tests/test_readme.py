@@ -1,7 +1,9 @@
-"""The README, run as a new user would: every ``pvcloth`` command it shows on
-a bundled scene runs as written (in a fresh folder holding the repository's
-``data/``), every subcommand it names answers ``--help``, every subcommand of
-the program is documented, and every fenced ``python`` block runs.
+"""The README and the guide, run as a new user would: every ``pvcloth``
+command they show on a bundled scene runs as written (in a fresh folder
+holding the repository's ``data/``), every subcommand they name answers
+``--help``, every subcommand of the program is documented, and every fenced
+``python`` block runs. The guide is every Markdown page of ``docs/`` (what
+the build generates aside).
 
 The commands go through the console script, the documented path, not the
 Python functions behind it. ``pvcloth run`` needs a screen: it is run as a
@@ -22,6 +24,16 @@ from conftest import ROOT
 from pvcloth.cli import build_parser
 
 README = (ROOT / "README.md").read_text(encoding="utf-8")
+#: The pages a user reads, by their path in the repository.
+GENERATED = ("docs/_build", "docs/api", "docs/auto_examples", "docs/performance/results")
+PAGES = {
+    "README.md": README,
+    **{
+        str(path.relative_to(ROOT)): path.read_text(encoding="utf-8")
+        for path in sorted((ROOT / "docs").rglob("*.md"))
+        if not str(path.relative_to(ROOT)).startswith(GENERATED)
+    },
+}
 PVCLOTH = str(Path(sys.executable).with_name("pvcloth"))
 
 
@@ -47,9 +59,18 @@ def _subcommand(command: str) -> str:
     return command.split()[1]
 
 
-COMMANDS = documented_commands(README)
-#: Commands on real files (the others are templates: SCENE.toml, OUT.gif...).
-RUNNABLE = [c for c in COMMANDS if "data/scenes/" in c and _subcommand(c) != "run"]
+COMMANDS = [command for text in PAGES.values() for command in documented_commands(text)]
+#: Commands on real files (the others are templates: SCENE.toml, OUT.gif...),
+#: each once.
+RUNNABLE = list(
+    dict.fromkeys(c for c in COMMANDS if "data/scenes/" in c and _subcommand(c) != "run")
+)
+#: Every fenced python block, by page and number.
+PYTHON = [
+    (page, number, code)
+    for page, text in PAGES.items()
+    for number, code in enumerate(fenced_blocks(text, "python"))
+]
 #: Commands that take half a minute to minutes as written (a 120-run sweep,
 #: every integrator at 8 steps, three panels against an RK4 reference): the
 #: validation tier runs them; their quick twins run the same code smaller
@@ -127,9 +148,10 @@ def test_readme_command_runs_as_written(command, user_folder):
 
 
 @pytest.mark.usefixtures("rendering")
-@pytest.mark.parametrize("number", range(len(fenced_blocks(README, "python"))))
-def test_readme_python_block_runs_as_written(number, user_folder):
-    code = fenced_blocks(README, "python")[number]
+@pytest.mark.parametrize(
+    ("page", "number", "code"), PYTHON, ids=[f"{page}-{number}" for page, number, _ in PYTHON]
+)
+def test_readme_python_block_runs_as_written(page, number, code, user_folder):
     result = subprocess.run(
         [sys.executable, "-c", code], cwd=user_folder, capture_output=True, text=True, timeout=600
     )

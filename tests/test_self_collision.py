@@ -559,7 +559,7 @@ def test_a_step_that_would_list_too_many_pairs_is_refused_with_a_clear_error(mon
 
 @pytest.mark.parametrize("n", [32, pytest.param(64, marks=pytest.mark.validation)])
 def test_a_folded_towel_at_rest_does_not_chatter(n):
-    # The towel of examples/fold_a_towel.py, let go at 1 s, over its third
+    # The towel of examples/03_self_collision/towel_helpers.py, let go at 1 s, over its third
     # second. Layers that chatter gain about one step of gravity every step:
     # the bound is a hundredth of that, the kinetic energy of the whole cloth
     # after one step of free fall, (1/2) M (g dt)^2. (Pushing the two sides
@@ -588,8 +588,8 @@ def test_friction_between_layers_holds_a_fold_on_a_slope():
     # the layers holds the top half; with none it slides away.
     import sys
 
-    sys.path.insert(0, str(ROOT / "examples"))
-    from fold_a_towel import fold_a_towel
+    sys.path.insert(0, str(ROOT / "examples" / "03_self_collision"))
+    from towel_helpers import fold_a_towel
 
     slid = {}
     for friction in (0.3, 0.0):

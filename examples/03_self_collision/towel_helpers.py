@@ -1,11 +1,15 @@
-"""Fold a towel: a cloth lying on the floor is folded in half by its left
-edge, let go, and settles on itself; self-collision keeps the top half on
-the bottom one (without it the top half falls through).
+"""The folded towel, for the gallery and the tests: a cloth lying on the floor
+is folded in half by its left edge, let go, and settles on itself.
 
 The left edge is pinned and carried over on a half circle in one second,
 laid 2 cm above the right half and released. Bending is soft (0.2 N/m), as
 a towel's, so the fold stays folded instead of springing open.
-Run:  python examples/fold_a_towel.py [OUTPUT.gif]
+
+``plot_fold_a_towel.py`` beside this file is the lesson; the self-collision
+tests (``tests/contact_scenes.py``, ``tests/test_self_collision.py``) import
+:func:`fold_a_towel` from here. The gallery leaves this file out (its name
+ends in ``_helpers.py``). Run it to write the movie of the guide:
+``python examples/03_self_collision/towel_helpers.py docs/towel_fold.gif``.
 """
 
 from __future__ import annotations
@@ -18,7 +22,7 @@ import numpy as np
 import pvcloth
 
 # The bundled scene, found from this file so the script runs from any folder.
-SCENE = Path(__file__).resolve().parents[1] / "data" / "scenes" / "ground.toml"
+SCENE = Path(__file__).resolve().parents[2] / "data" / "scenes" / "ground.toml"
 #: Seconds the fold takes; the edge is let go at this time.
 FOLD_TIME = 1.0
 
@@ -29,9 +33,27 @@ def fold_a_towel(
     contact: bool = True,
     friction: float = 0.3,
 ):
-    """The towel on the floor, ready to fold: ``(sim, drive)``; call
-    ``drive(sim)`` before each advance to move (and then let go) the edge.
-    ``contact`` turns self-collision on, with ``friction`` between layers."""
+    """The towel on the floor, ready to fold.
+
+    Parameters
+    ----------
+    resolution : int
+        Points along each side of the 1 m square towel.
+    integrator : str
+        The integrator's name (its automatic step).
+    contact : bool
+        Turn self-collision on (a ``[self_collision]`` table).
+    friction : float
+        Coulomb friction between the towel's layers.
+
+    Returns
+    -------
+    sim : pvcloth.Simulation
+        The towel flat on the floor, its left edge pinned.
+    drive : callable
+        ``drive(sim)``, called before each advance, carries the left edge
+        over the fold and lets it go at :data:`FOLD_TIME`.
+    """
     scene = pvcloth.load_scene(SCENE).with_resolution(resolution)
     scene = scene.with_overrides(
         {
