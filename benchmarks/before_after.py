@@ -161,11 +161,13 @@ def main() -> None:
         "--batch", type=float, default=0.2, help="seconds of calls timed per case and round"
     )
     parser.add_argument("--grid", type=int, help="every case at this many points per side")
+    parser.add_argument("--only", help="only the cases whose name contains this text")
     parser.add_argument("--out", type=Path, default=HERE / "results" / "before_after.md")
     args = parser.parse_args()
 
     labels = [short(args.before), short(args.after) if args.after else "working tree"]
     cases = [case if args.grid is None else (*case[:2], args.grid, *case[3:]) for case in CASES]
+    cases = [case for case in cases if args.only is None or args.only in case[0]]
     made = []  # worktrees this run added, removed at the end
     with tempfile.TemporaryDirectory() as temporary:
         trees = []
@@ -222,6 +224,7 @@ def main() -> None:
             f"`python benchmarks/before_after.py {labels[0]}"
             + (f" {labels[1]}" if args.after else "")
             + (f" --grid {args.grid}" if args.grid else "")
+            + (f" --only {args.only!r}" if args.only else "")
             + f" --rounds {args.rounds} --batch {args.batch}` on {machine}. Median of "
             f"{args.rounds} rounds, each timing about {args.batch} s of calls (at least one) per "
             "case and commit, the commits taking turns; ms per call (`step()`, or "

@@ -329,10 +329,17 @@ def build_parser() -> argparse.ArgumentParser:
     compare.set_defaults(func=cmd_compare)
 
     exp = sub.add_parser(
-        "export", help="write a time series for ParaView (.pvd, .xdmf) or Blender (.obj)"
+        "export",
+        help="write a time series for ParaView (.pvd, .xdmf) or Blender (.pc2 point cache "
+        "with its .obj, or .obj frames)",
     )
     _add_overrides(exp)
-    exp.add_argument("-o", "--output", required=True, help="OUT.pvd, OUT.xdmf or OUT.obj")
+    exp.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        help="OUT.pvd, OUT.xdmf, OUT.pc2 (writes OUT.obj beside it) or OUT.obj",
+    )
     exp.add_argument("--frames", type=int, default=60, help="frames (default 60)")
     exp.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
     exp.add_argument("--quiet", action="store_true", help="no progress bar")

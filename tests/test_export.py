@@ -94,6 +94,49 @@ def test_obj_sequence_for_blender(tmp_path):
     assert (again / "again_00002.obj").read_bytes() == files[-1].read_bytes()
 
 
+def read_pc2(path):
+    """A PC2 point cache read from its documented layout, written here apart
+    from pvcloth's writer: ``POINTCACHE2\\0``, version, points, start frame,
+    sample rate, samples (little-endian int32/float32), then float32 x, y, z
+    per point per sample."""
+    data = path.read_bytes()
+    assert data[:12] == b"POINTCACHE2\x00"
+    version, points, samples = (int.from_bytes(data[i : i + 4], "little") for i in (12, 16, 28))
+    start, rate = np.frombuffer(data[20:28], dtype="<f4")
+    frames = np.frombuffer(data[32:], dtype="<f4").reshape(samples, points, 3)
+    return version, float(start), float(rate), frames
+
+
+def test_a_point_cache_for_blender_matches_the_paraview_series(tmp_path):
+    import meshio
+    import pyvista as pv
+
+    cache = export(cloth(), tmp_path / "cloth.pc2", frames=4, fps=20, progress=False)
+    version, start, rate, frames = read_pc2(cache)
+    assert (version, start, rate, frames.shape) == (1, 0.0, 1.0, (4, 36, 3))
+    reader = pv.get_reader(exported(tmp_path / "cloth.pvd"))
+    assert len(reader.time_values) == len(frames)
+    for n in range(len(frames)):
+        reader.set_active_time_point(n)
+        points = reader.read()[0].points
+        # float32 in the cache: within its rounding of metres-sized values
+        np.testing.assert_allclose(frames[n], points, rtol=0, atol=1e-6)
+    # The base mesh: the first frame, with the cache's vertex order and
+    # the grid's texture coordinates.
+    base = meshio.read(tmp_path / "cloth.obj")
+    np.testing.assert_allclose(base.points, frames[0], rtol=0, atol=1e-6)
+    assert base.point_data["obj:vt"].shape == (36, 2)
+
+
+def test_an_interrupted_point_cache_counts_the_frames_it_holds(tmp_path):
+    sim = Simulation(small_scene(8, stiffness=2000.0), dt=2e-3, stability="ignore")
+    with pytest.raises(ExportInterrupted) as caught:
+        export(sim, tmp_path / "broken.pc2", frames=50, fps=30, progress=False)
+    _, _, _, frames = read_pc2(tmp_path / "broken.pc2")  # the header agrees with the data
+    assert len(frames) == caught.value.frames >= 1 and np.isfinite(frames).all()
+    assert (tmp_path / "broken.obj").exists() and not list(tmp_path.rglob(".*"))
+
+
 def test_files_get_the_umask_mode_and_formats_keep_their_own_folders(tmp_path):
     import os
 
@@ -229,3 +272,70 @@ def test_exports_carry_the_fields_paraview_colours_by(tmp_path, suffix):
     assert names <= set(data)
     np.testing.assert_allclose(data["stretch"], sim.mesh.point_data["stretch"], rtol=1e-12)
     np.testing.assert_allclose(data["energy"], sim.mesh.point_data["energy"], rtol=1e-12)
+
+
+#: What Blender runs (in background mode): import the base OBJ as the guide
+#: says, add the Mesh Cache modifier on the PC2 file as it says, and write the evaluated
+#: vertex positions at Blender frames 1, 2 and 4 as JSON.
+BLENDER_SCRIPT = """
+import json, sys
+import bpy
+
+obj_path, pc2_path, out_path = sys.argv[sys.argv.index("--") + 1 :]
+bpy.ops.wm.read_factory_settings(use_empty=True)
+if hasattr(bpy.ops.wm, "obj_import"):
+    bpy.ops.wm.obj_import(filepath=obj_path, forward_axis="Y", up_axis="Z")
+else:
+    bpy.ops.import_scene.obj(filepath=obj_path, axis_forward="Y", axis_up="Z", split_mode="OFF")
+cloth = bpy.context.selected_objects[0]
+cache = cloth.modifiers.new("cache", "MESH_CACHE")
+cache.cache_format = "PC2"
+cache.filepath = pc2_path
+cache.frame_start = 1  # as the guide says: Blender's frame 1 is the first exported
+frames = {}
+for frame in (1, 2, 4):
+    bpy.context.scene.frame_set(frame)
+    evaluated = cloth.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    world = evaluated.matrix_world
+    frames[frame] = [list(world @ v.co) for v in evaluated.to_mesh().vertices]
+    evaluated.to_mesh_clear()
+json.dump(frames, open(out_path, "w"))
+"""
+
+
+def test_blender_plays_the_point_cache_on_the_base_mesh(tmp_path):
+    import json
+    import shutil
+    import subprocess
+
+    blender = shutil.which("blender")
+    if blender is None:
+        pytest.skip(
+            "Blender is not installed (Debian: apt-get install blender): the cache is "
+            "checked by test_a_point_cache_for_blender_matches_the_paraview_series only"
+        )
+    cache = export(cloth(), tmp_path / "cloth.pc2", frames=4, fps=20, progress=False)
+    script = tmp_path / "play.py"
+    script.write_text(BLENDER_SCRIPT)
+    out = tmp_path / "frames.json"
+    done = subprocess.run(
+        [
+            blender,
+            "--background",
+            "--factory-startup",
+            "--python",
+            str(script),
+            "--",
+            str(tmp_path / "cloth.obj"),
+            str(cache),
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0 and out.exists(), done.stdout[-3000:] + done.stderr[-3000:]
+    played = {int(k): np.array(v) for k, v in json.loads(out.read_text()).items()}
+    _, _, _, frames = read_pc2(cache)
+    for frame, points in played.items():  # Blender frame n is the cache's frame n - 1
+        np.testing.assert_allclose(points, frames[frame - 1], rtol=0, atol=1e-5)

@@ -14,6 +14,15 @@ stretch, force N, energy J/m^2, pinned), so ParaView colours by any of them.
     once, so each frame stores ``displacement`` (from the rest positions) as
     point data besides the fields: in ParaView apply *Warp By Vector* with
     ``displacement`` to see the cloth move.
+``.pc2``
+    a point cache for Blender's built-in *Mesh Cache* modifier (no add-on):
+    ``OUT.pc2`` holds every frame's positions, ``OUT.obj`` the cloth at the
+    first frame with texture coordinates and normals, in the same vertex
+    order. In Blender: *File → Import → Wavefront (.obj)* ``OUT.obj`` with
+    *Forward* Y and *Up* Z, then *Add Modifier → Mesh Cache*, format PC2,
+    file ``OUT.pc2``, axes *Forward* +Y and *Up* +Z (its defaults), *Frame
+    Start* 1 (so that Blender's first frame, 1, shows the first exported
+    one), and the scene's frame rate set to the export's ``fps``.
 ``.obj``
     one OBJ file per frame in ``OUT_obj/`` for Blender, with texture
     coordinates (the grid's, 0 to 1) and vertex normals, the same vertex
@@ -21,7 +30,8 @@ stretch, force N, energy J/m^2, pinned), so ParaView colours by any of them.
     writer stamps the time and cannot give faces texture coordinates, so
     pvcloth writes these itself). The data is z-up in metres: in Blender's
     OBJ importer set *Forward* to Y and *Up* to Z. Blender has no built-in
-    sequence importer; an add-on (e.g. Stop-motion-OBJ) plays the folder.
+    sequence importer; an add-on (e.g. Stop-motion-OBJ) plays the folder,
+    or export ``.pc2`` instead.
 
 Every file and frames folder is written under a hidden temporary name beside
 it and moved into place when the writing stops, finished or interrupted
@@ -35,6 +45,7 @@ format has a folder of its own. Nothing here changes the working directory.
 from __future__ import annotations
 
 import os
+import struct
 from contextlib import ExitStack
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -53,7 +64,20 @@ from pvcloth.signals import deferred
 if TYPE_CHECKING:  # for annotations only
     from pvcloth.physics.simulation import Simulation
 
-FORMATS = (".pvd", ".xdmf", ".obj")
+FORMATS = (".pvd", ".xdmf", ".obj", ".pc2")
+#: The PC2 header (Blender's Mesh Cache reads it): signature, version, points,
+#: start frame, samples per frame, samples; then float32 x, y, z per point per
+#: sample, all little-endian.
+PC2_HEADER = struct.Struct("<12siiffi")
+
+
+def write_pc2_header(out, points: int, samples: int) -> None:
+    """Write (or rewrite, at the start of ``out``) a PC2 header for
+    ``points`` points and ``samples`` frames, one sample per frame, the
+    first at frame 0 (where Blender's Mesh Cache puts it, whatever the
+    header says)."""
+    out.seek(0)
+    out.write(PC2_HEADER.pack(b"POINTCACHE2\0", 1, points, 0.0, 1.0, samples))
 
 
 def grid_texture_coordinates(resolution: tuple[int, int]) -> np.ndarray:
@@ -107,7 +131,8 @@ def export(
         Advanced by ``1 / fps`` between frames; the first frame is its
         current state.
     output : path
-        ``OUT.pvd``, ``OUT.xdmf`` or ``OUT.obj`` (see the module docstring).
+        ``OUT.pvd``, ``OUT.xdmf``, ``OUT.pc2`` (with ``OUT.obj``) or
+        ``OUT.obj`` (see the module docstring).
     frames : int
         Number of frames, at least 1.
     fps : float
@@ -118,7 +143,8 @@ def export(
     Returns
     -------
     Path
-        The index file (``.pvd``, ``.xdmf``) or the frames folder (``.obj``).
+        The index file (``.pvd``, ``.xdmf``), the point cache (``.pc2``) or
+        the frames folder (``.obj``).
 
     Raises
     ------
@@ -154,8 +180,9 @@ def export(
     # earlier export at this path as it was. The data goes before the index
     # that names it.
     with ExitStack() as temporaries:  # what is not published is removed
-        if suffix == ".xdmf":
-            names = [path.with_suffix(".h5"), path]
+        if suffix in (".xdmf", ".pc2"):
+            extra = ".h5" if suffix == ".xdmf" else ".obj"
+            names = [path.with_suffix(extra), path]
             outputs = [temporaries.enter_context(Staged(name)) for name in names]
         else:
             outputs = [temporaries.enter_context(Staged(folder, folder=True))]
@@ -191,6 +218,24 @@ def export(
                 finally:
                     with deferred(then_raise=False):  # closing writes the .xdmf itself
                         writer.__exit__(None, None, None)
+                return path
+            if suffix == ".pc2":
+                obj, pc2 = outputs
+                texture = grid_texture_coordinates(sim.resolution)
+                with open(pc2.temporary, "wb") as cache:
+                    try:
+                        write_pc2_header(cache, sim.model.n_points, 0)
+                        for n in bar:
+                            with deferred():  # a frame is written whole
+                                if n == 0:  # the base mesh: the first frame
+                                    write_obj(
+                                        obj.temporary, sim.positions, sim.model.shape, texture
+                                    )
+                                cache.write(np.asarray(sim.positions, dtype="<f4").tobytes())
+                                done += 1
+                    finally:
+                        with deferred(then_raise=False):  # the header counts what is there
+                            write_pc2_header(cache, sim.model.n_points, done)
                 return path
             staged = outputs[0].temporary
             texture = grid_texture_coordinates(sim.resolution)
