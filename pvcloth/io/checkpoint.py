@@ -71,8 +71,7 @@ def save_checkpoint(sim: Simulation, path: str | os.PathLike) -> Path:
         t=np.array(sim.state.t),
         steps=np.array(sim.steps),
         owed=np.array(sim.owed),
-        pinned=sim.control.pinned,
-        targets=sim.control.targets,
+        **sim.control.get_state(),  # pinned, targets
         **extra,
     )
 

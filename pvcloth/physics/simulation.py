@@ -440,8 +440,7 @@ class Simulation(Clocks, LiveEdits, Pins):
         sim.stiffness_scale = stiffness_scale
         sim.set_state(state.x, state.v, state.t, steps=steps)
         sim.owed = owed
-        sim.control.targets[:] = targets
-        sim.control.pinned = pinned
+        sim.control.set_state({"pinned": pinned, "targets": targets})
         sim.integrator.set_state(integrator_state)
         if sim.controller is not None and controller_state is not None:
             sim.controller.set_state(controller_state, step=dt)

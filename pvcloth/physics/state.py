@@ -80,6 +80,16 @@ class Control:
         self.targets = np.asarray(targets, dtype=float)
         self.pinned = pinned
 
+    def get_state(self) -> dict[str, np.ndarray]:
+        """What a checkpoint keeps of the pins: ``pinned`` (N,) bool and
+        ``targets`` (N, 3) m (:meth:`set_state` takes it back)."""
+        return {"pinned": self.pinned, "targets": self.targets}
+
+    def set_state(self, state: dict[str, np.ndarray]) -> None:
+        """Take back what :meth:`get_state` gave (copied)."""
+        self.targets[:] = state["targets"]
+        self.pinned = state["pinned"]
+
     @classmethod
     def from_model(cls, model) -> Control:
         """The scene's pins, targets at the rest positions."""
