@@ -9,6 +9,9 @@ when the mesh or a plot is first asked for.
 
 from __future__ import annotations
 
+import time
+
+from pvcloth.errors import InputError
 from pvcloth.physics import simulation as physics
 
 
@@ -91,5 +94,71 @@ class Simulation(physics.Simulation):
 
         return plot_cloth(self, **kwargs)
 
+    def advance(self, seconds: float, progress: bool | str = False) -> None:
+        """Simulate ``seconds`` more (see
+        :meth:`pvcloth.physics.simulation.Simulation.advance`), with a
+        progress bar over the simulated seconds if ``progress`` is true, or
+        with ``"auto"`` once the first steps predict more than
+        :data:`PROGRESS_AFTER` seconds of wall time for the call (a terminal
+        bar, or a widget in a notebook).
+
+        Examples
+        --------
+        >>> import pvcloth
+        >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(8, 8))))
+        >>> sim.advance(0.05, progress="auto")  # a bar only if this were slow
+        >>> round(sim.time, 3)
+        0.05
+        """
+        if progress not in (False, True, "auto"):
+            raise InputError("progress", f"expected True, False or 'auto', got {progress!r}")
+        if progress is False:
+            return super().advance(seconds)
+        bar = _ProgressBar(seconds, always=progress is True)
+        try:
+            super().advance(seconds, on_step=bar.update)
+        finally:
+            bar.close()
+
     def _state_changed(self) -> None:
         self.update_mesh()
+
+
+#: Wall seconds an advance must be expected to take before its bar shows by default.
+PROGRESS_AFTER = 3.0
+
+
+class _ProgressBar:
+    """A tqdm bar over an advance's simulated seconds, opened at once when
+    asked for, else only once the steps so far predict more than
+    :data:`PROGRESS_AFTER` seconds for the whole call."""
+
+    def __init__(self, seconds: float, always: bool):
+        self.seconds, self.always = seconds, always
+        self.started = time.perf_counter()
+        self.bar = None
+        self.shown = 0  # simulated milliseconds on the bar
+        if always:
+            self._open()
+
+    def _open(self) -> None:
+        from tqdm.auto import tqdm
+
+        # In whole simulated milliseconds: float counts can pass the total by a rounding.
+        total = max(1, round(1000 * self.seconds))
+        self.bar = tqdm(total=total, desc="advancing", unit="ms simulated")
+
+    def update(self, done: float) -> None:
+        done = min(done, self.seconds)  # time owed from the call before adds steps
+        if self.bar is None:
+            spent = time.perf_counter() - self.started
+            if done <= 0.0 or spent * self.seconds / done <= PROGRESS_AFTER:
+                return
+            self._open()
+        now = min(round(1000 * done), self.bar.total)
+        self.bar.update(now - self.shown)
+        self.shown = now
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()

@@ -91,3 +91,16 @@ def test_set_state_refuses_what_no_state_can_be(keywords, message):
     with pytest.raises(InputError, match=message):
         sim.set_state(**keywords)
     assert np.array_equal(sim.positions, before)
+
+
+def test_advance_shows_a_bar_when_asked_and_keeps_the_same_steps(capsys):
+    plain, shown = small("rk4"), small("rk4")
+    plain.advance(0.1)
+    shown.advance(0.1, progress=True)
+    assert np.array_equal(plain.positions, shown.positions) and plain.steps == shown.steps
+    assert "advancing" in capsys.readouterr().err
+    quiet = small("rk4")
+    quiet.advance(0.1, progress="auto")  # a tenth of a second: no bar
+    assert "advancing" not in capsys.readouterr().err
+    with pytest.raises(InputError, match="progress"):
+        quiet.advance(0.1, progress="yes")

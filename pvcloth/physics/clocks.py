@@ -25,12 +25,15 @@ class Clocks:
     (they read its ``dt``, ``controller``, ``owed``, ``state`` and ``control``
     and call its ``_substep`` and ``_state_changed``)."""
 
-    def advance(self, seconds: float) -> None:
+    def advance(self, seconds: float, on_step=None) -> None:
         """Simulate ``seconds`` more, in fixed substeps of ``dt``.
 
         Time not covered by whole substeps is carried over to the next call,
         so many short advances add up to the same run as one long one. Pinned
         points move in a straight line to their targets over the substeps.
+        ``on_step(done)``, if given, is called after every step with the
+        simulated seconds done of this call (how a progress bar follows it;
+        the physics draws none).
 
         Raises
         ------
@@ -43,7 +46,7 @@ class Clocks:
         """
         seconds = real("seconds", seconds, minimum=0.0, error=InputError)
         if self.controller is not None:
-            self._advance_adaptive(seconds)
+            self._advance_adaptive(seconds, on_step)
             return
         self.check_run_length(self.owed + seconds)
         self.owed += seconds
@@ -58,6 +61,8 @@ class Clocks:
             with self._one_pool():
                 for s in range(1, n + 1):
                     self._substep(pinned, start + (goal - start) * (s / n))
+                    if on_step is not None:
+                        on_step(s * self.dt)
         finally:  # after a divergence too: viewers show the last good state
             self._state_changed()
 
@@ -133,7 +138,7 @@ class Clocks:
             return one_blas_thread()
         return contextlib.nullcontext()
 
-    def _advance_adaptive(self, seconds: float) -> None:
+    def _advance_adaptive(self, seconds: float, on_step=None) -> None:
         """Steps chosen by the controller until exactly ``seconds`` later;
         rejected ones are retried shorter and leave no trace."""
         control = self.controller
@@ -171,6 +176,8 @@ class Clocks:
                         # wanted (else every frame's end restarted it small).
                         control.step = max(control.step, natural)
                     self.dt = control.step
+                    if on_step is not None:
+                        on_step(self._state.t - start_time)
         finally:  # after a divergence too: viewers show the last good state
             self._state_changed()
 
