@@ -530,3 +530,22 @@ def test_the_overlay_says_an_adaptive_run_s_mean_step():
         .endswith(f"dt = {fixed.dt:.3g} s")
     )
     plotter.close()
+
+
+@pytest.mark.usefixtures("rendering")
+def test_sim_plot_draws_the_obstacles_and_ground_render_draws(tmp_path):
+    ball = pvcloth.ObstacleSpec("sphere", center=(0.0, 0.0, 0.6), radius=0.25)
+    floor = pvcloth.ObstacleSpec("ground")
+    cloth = pvcloth.ClothSpec(resolution=(12, 12), orientation="horizontal", center=(0, 0, 1.0))
+    scene = pvcloth.Scene(cloth=cloth, pins=pvcloth.PinSpec(corners=()))
+    near = {}
+    for name, obstacles in (("bare", ()), ("with", (ball, floor))):
+        sim = Simulation(scene.replace(obstacles=obstacles))
+        sim.advance(0.5)  # draped over the ball
+        shot = tmp_path / f"{name}.png"
+        sim.plot(off_screen=True, window_size=(320, 240), screenshot=str(shot))
+        image = iio.imread(shot)[..., :3].astype(int)
+        # pixels of the obstacles' blue-grey and of the ground's checker
+        colours = [(0x8F, 0xA3, 0xB8), (0xDD, 0xD8, 0xCC), (0xC9, 0xC3, 0xB5)]
+        near[name] = [int((np.abs(image - c).sum(axis=2) < 60).sum()) for c in colours]
+    assert sum(near["with"]) > 10000 > 10 * sum(near["bare"]), near

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pyvista as pv
 
-from pvcloth.visual.colors import GROUND_COLORS, nice_ceiling
+from pvcloth.visual.colors import GROUND_COLORS, OBSTACLE_COLOR, nice_ceiling
 
 
 def obstacle_surface(obstacle, extent: float) -> pv.PolyData:
@@ -38,6 +38,31 @@ def checker_texture() -> pv.Texture:
     texture.repeat = True
     texture.interpolate = False
     return texture
+
+
+def add_obstacles(plotter: pv.Plotter, sim) -> list:
+    """Draw ``sim``'s obstacles (spheres, boxes, a checkered ground) where
+    they are at ``sim.time``, as movies and the window show them; returns
+    their actors (whose ``user_matrix`` moves them)."""
+    actors = []
+    extent = 4.0 * max(sim.scene.cloth.size)
+    for n, obstacle in enumerate(sim.model.obstacles):
+        ground = obstacle.name == "ground"
+        actor = plotter.add_mesh(
+            obstacle_surface(obstacle, extent),
+            color=None if ground else OBSTACLE_COLOR,
+            texture=checker_texture() if ground else None,
+            smooth_shading=not ground and obstacle.name != "box",
+            # The floor lit mostly by ambient light: it reads as a light
+            # floor from any camera, not a dark slab at grazing light.
+            ambient=0.7 if ground else 0.25,
+            diffuse=0.35 if ground else 0.75,
+            specular=0.0 if ground else 0.3,
+            name=f"obstacle{n}",
+        )
+        actor.user_matrix = obstacle_matrix(obstacle, sim.time)
+        actors.append(actor)
+    return actors
 
 
 def obstacle_matrix(obstacle, t: float) -> np.ndarray:

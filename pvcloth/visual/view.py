@@ -27,24 +27,43 @@ from pvcloth.visual.colors import (
     CLOTH_COLOR,
     FIELD_TITLES,
     FIELDS,
-    OBSTACLE_COLOR,
     ColorRange,
     check_cmap,
     check_field,
 )
 from pvcloth.visual.framing import motion_bounds
 from pvcloth.visual.gl import use_offscreen_gl_if_headless
-from pvcloth.visual.scenery import checker_texture, obstacle_matrix, obstacle_surface
+from pvcloth.visual.scenery import add_obstacles, obstacle_matrix
 
 if TYPE_CHECKING:  # for annotations only
     from pvcloth.physics.simulation import Simulation
     from pvcloth.physics.state import Snapshot
 
 
+#: ``pyvista.plot`` keywords that set up the plotter or its ``show()``; the
+#: rest go to ``add_mesh``, as ``pyvista.plot`` passes them.
+PLOTTER_KEYWORDS = ("off_screen", "window_size", "notebook", "theme")
+SHOW_KEYWORDS = (
+    "screenshot",
+    "interactive",
+    "return_img",
+    "return_cpos",
+    "return_viewer",
+    "jupyter_backend",
+    "jupyter_kwargs",
+    "full_screen",
+    "auto_close",
+)
+
+
 def plot_cloth(sim: Simulation, **kwargs):
     """``sim.mesh.plot(**kwargs)`` in the cloth's colours and smooth shading,
-    unless ``scalars`` or ``color`` say otherwise; a field of the mesh gets a
-    scalar bar titled with its unit."""
+    unless ``scalars`` or ``color`` say otherwise, with the scene's obstacles
+    and ground drawn as ``render`` draws them; a field of the mesh gets a
+    scalar bar titled with its unit. ``pyvista.plot``'s keywords are taken
+    (``off_screen``, ``window_size``, ``screenshot``, ``cpos``,
+    ``background``, ``text``, ``show_axes``, ``zoom``; the others go to
+    ``add_mesh``)."""
     scalars = kwargs.get("scalars")
     if scalars is None:
         kwargs.setdefault("color", CLOTH_COLOR)
@@ -55,7 +74,30 @@ def plot_cloth(sim: Simulation, **kwargs):
         kwargs["scalar_bar_args"] = bar
     kwargs.setdefault("smooth_shading", True)
     use_offscreen_gl_if_headless()
-    return sim.mesh.plot(**kwargs)
+    if not sim.model.obstacles:
+        return sim.mesh.plot(**kwargs)
+    made = {key: kwargs.pop(key) for key in PLOTTER_KEYWORDS if key in kwargs}
+    shown = {key: kwargs.pop(key) for key in SHOW_KEYWORDS if key in kwargs}
+    cpos, zoom = kwargs.pop("cpos", None), kwargs.pop("zoom", None)
+    background, text = kwargs.pop("background", None), kwargs.pop("text", "")
+    show_axes = kwargs.pop("show_axes", None)
+    plotter = pv.Plotter(**made)
+    plotter.add_mesh(sim.mesh, **kwargs)
+    add_obstacles(plotter, sim)
+    if background is not None:
+        plotter.set_background(background)
+    if text:
+        plotter.add_text(text)
+    if show_axes or (show_axes is None and plotter.theme.axes.show):
+        plotter.show_axes()
+    # Framed on the cloth, as pyvista.plot would frame it alone: a ground
+    # drawn four cloths wide must not shrink it to a speck.
+    plotter.camera_position = plotter.get_default_cam_pos() if cpos is None else cpos
+    plotter.reset_camera(bounds=sim.mesh.bounds)
+    plotter.camera_set = True  # show() keeps this framing
+    if zoom is not None:
+        plotter.camera.zoom(zoom)
+    return plotter.show(**shown)
 
 
 class ClothView:
@@ -140,7 +182,7 @@ class ClothView:
                 render_points_as_spheres=True,
                 name="pins",
             )
-        self.obstacle_actors = self._add_obstacles()
+        self.obstacle_actors = add_obstacles(plotter, sim)
         self.text = None
         self._clock = None  # (time, steps) when the overlay last said the step
         if label:
@@ -219,27 +261,6 @@ class ClothView:
         # A colour map colours both sides; the back is drawn darker.
         actor.backface_prop = pv.Property(**{**material, "diffuse": 0.45, "ambient": 0.12})
         return actor
-
-    def _add_obstacles(self) -> list:
-        actors = []
-        extent = 4.0 * max(self.sim.scene.cloth.size)
-        for n, obstacle in enumerate(self.sim.model.obstacles):
-            ground = obstacle.name == "ground"
-            actor = self.plotter.add_mesh(
-                obstacle_surface(obstacle, extent),
-                color=None if ground else OBSTACLE_COLOR,
-                texture=checker_texture() if ground else None,
-                smooth_shading=not ground and obstacle.name != "box",
-                # The floor lit mostly by ambient light: it reads as a light
-                # floor from any camera, not a dark slab at grazing light.
-                ambient=0.7 if ground else 0.25,
-                diffuse=0.35 if ground else 0.75,
-                specular=0.0 if ground else 0.3,
-                name=f"obstacle{n}",
-            )
-            actor.user_matrix = obstacle_matrix(obstacle, self.sim.time)
-            actors.append(actor)
-        return actors
 
     def _set_camera(self, mode: str) -> None:
         if mode == "none":
