@@ -223,6 +223,16 @@ def cmd_tradeoff(args) -> None:
             for v in args.tolerances.split(",")
             if v.strip() and args.tolerances.strip() != "none"
         ]
+    expected = tradeoff.estimate_seconds(
+        scene, integrators, steps, duration=args.duration, tolerances=tolerances
+    )
+    nx, ny = scene.cloth.resolution
+    note = f"pvcloth: about {_duration(expected)} for these runs at {nx}x{ny} points"
+    if expected > 90:
+        shorter = ["--resolution 16"] if max(nx, ny) > 16 else []
+        shorter += ["fewer --integrators", "fewer --steps", "a shorter --duration"]
+        note += f" (to make it shorter: {', '.join(shorter)})"
+    print(note, file=sys.stderr, flush=True)
     runs = tradeoff.measure(
         scene,
         integrators=integrators,
@@ -234,12 +244,20 @@ def cmd_tradeoff(args) -> None:
     out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     tradeoff.write_csv(runs, out / "tradeoff.csv")
-    nx, ny = scene.cloth.resolution
     tradeoff.plot(
         runs, out / "tradeoff.png", f"{scene.name}, {nx}x{ny} points, {args.duration:g} s simulated"
     )
     print(tradeoff.table(runs))
     print(f"wrote {out / 'tradeoff.csv'} and {out / 'tradeoff.png'}")
+
+
+def _duration(seconds: float) -> str:
+    """A wall time as a person says it: '40 s', '3 min', '1.5 h'."""
+    if seconds < 90:
+        return f"{max(seconds, 1):.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
 
 
 def cmd_sweep(args) -> None:

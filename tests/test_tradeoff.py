@@ -79,8 +79,21 @@ def test_command_writes_csv_plot_and_table(tmp_path, capsys):
     adaptive = sorted(float(r["tolerance"]) for r in rows if r["tolerance"] != "nan")
     assert adaptive == [1e-2, 1e-1]
     assert iio.imread(tmp_path / "tradeoff.png").ndim == 3
-    out = capsys.readouterr().out
-    assert "Pareto front" in out and "tol: an adaptive run's tolerance" in out
+    said = capsys.readouterr()
+    assert "Pareto front" in said.out and "tol: an adaptive run's tolerance" in said.out
+    # how long it would take, said before it starts; a few seconds here
+    assert said.err.startswith("pvcloth: about ") and "to make it shorter" not in said.err
+
+
+def test_the_estimate_grows_with_the_work_and_says_it_in_a_persons_units():
+    from pvcloth.cli import _duration
+    from pvcloth.studies.tradeoff import estimate_seconds
+
+    scene = small_scene(6)
+    one = estimate_seconds(scene, ["verlet"], [1e-3], duration=0.05, tolerances=[])
+    more = estimate_seconds(scene, ["verlet"], [1e-4, 1e-3], duration=0.05, tolerances=[])
+    assert 0 < one < more  # ten times the steps in the second run
+    assert [_duration(s) for s in (0.2, 42, 600, 3 * 3600)] == ["1 s", "42 s", "10 min", "3.0 h"]
 
 
 def test_adaptive_runs_join_the_fixed_ones():

@@ -31,14 +31,21 @@ from __future__ import annotations
 
 import csv
 import math
+import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 from tqdm.auto import tqdm
 
+from pvcloth.errors import DivergenceError
 from pvcloth.physics.integrators import INTEGRATORS
-from pvcloth.physics.reference import reference_run, reference_step, rms_distance
+from pvcloth.physics.reference import (
+    REFERENCE_INTEGRATOR,
+    reference_run,
+    reference_step,
+    rms_distance,
+)
 from pvcloth.physics.simulation import Simulation
 from pvcloth.studies.runs import dividing_step, timed_run
 
@@ -84,6 +91,52 @@ def default_steps(scene, count: int = 8) -> list[float]:
     return [float(dt) for dt in np.geomspace(limit / 16, 1 / 30, count)]
 
 
+def plan(scene, integrators=None, steps=None, duration=0.25, tolerances=None):
+    """The runs :func:`measure` makes: ``(names, steps, jobs)``, each job
+    ``(integrator, step or None, tolerance or None)``, backward Euler first."""
+    integrators = sorted(INTEGRATORS) if integrators is None else list(integrators)
+    steps = default_steps(scene) if steps is None else sorted(steps)
+    # Every run ends exactly at `duration` (see dividing_step).
+    steps = sorted({dividing_step(duration, dt) for dt in steps})
+    approximate = {n for n in integrators if INTEGRATORS[n].converges_to == CONVERGED}
+    names = ([CONVERGED] if approximate or CONVERGED in integrators else []) + [
+        n for n in integrators if n != CONVERGED
+    ]
+    jobs = [(name, dt, None) for name in names for dt in steps]
+    for name in integrators:
+        method = INTEGRATORS[name]
+        if method.embedded and method.interactive:
+            chosen = DEFAULT_TOLERANCES.get(method.order, ()) if tolerances is None else tolerances
+            jobs += [(name, None, tolerance) for tolerance in chosen]
+    return names, steps, jobs
+
+
+def estimate_seconds(scene, integrators=None, steps=None, duration=0.25, tolerances=None) -> float:
+    """Roughly how long :func:`measure` takes (wall seconds): each method's
+    cost per step, from a few steps of it here, times the steps of its fixed
+    runs and of the reference; an adaptive run counted as its method at the
+    middle step. For saying it before the minutes start."""
+    names, steps, jobs = plan(scene, integrators, steps, duration, tolerances)
+    middle = steps[len(steps) // 2]
+    cost = {}
+    for name in {job[0] for job in jobs} | {REFERENCE_INTEGRATOR}:
+        sim = Simulation(scene, integrator=name, dt=middle, stability="ignore")
+        start, taken = time.perf_counter(), 0
+        try:
+            sim.step()  # compiled, factorised
+            start = time.perf_counter()
+            while taken < 2:
+                sim.step()
+                taken += 1
+        except DivergenceError:  # too long a step for it: costs what it took
+            pass
+        cost[name] = (time.perf_counter() - start) / max(taken, 1)
+    total = duration / reference_step(scene, min(steps), duration) * cost[REFERENCE_INTEGRATOR]
+    for name, dt, _ in jobs:
+        total += duration / (dt or middle) * cost[name]
+    return total
+
+
 def measure(
     scene, *, integrators=None, steps=None, duration=0.25, tolerances=None, progress=True
 ) -> list[Run]:
@@ -112,9 +165,7 @@ def measure(
     list of Run
     """
     integrators = sorted(INTEGRATORS) if integrators is None else list(integrators)
-    steps = default_steps(scene) if steps is None else sorted(steps)
-    # Every run ends exactly at `duration` (see dividing_step).
-    steps = sorted({dividing_step(duration, dt) for dt in steps})
+    _, steps, jobs = plan(scene, integrators, steps, duration, tolerances)
     truth = reference_run(scene, duration, reference_step(scene, min(steps), duration))
     x_ref, e_ref = truth.positions, truth.energy()["total"]
     scale = max(abs(e_ref), truth.model.kinetic_energy(truth.velocities), 1e-12)
@@ -122,16 +173,7 @@ def measure(
     # The converged backward Euler runs come first, so that the methods
     # approximating it can be split against them.
     approximate = {n for n in integrators if INTEGRATORS[n].converges_to == CONVERGED}
-    names = ([CONVERGED] if approximate or CONVERGED in integrators else []) + [
-        n for n in integrators if n != CONVERGED
-    ]
     converged: dict[float, np.ndarray] = {}  # step -> backward Euler's positions there
-    jobs = [(name, dt, None) for name in names for dt in steps]
-    for name in integrators:
-        method = INTEGRATORS[name]
-        if method.embedded and method.interactive:
-            chosen = DEFAULT_TOLERANCES.get(method.order, ()) if tolerances is None else tolerances
-            jobs += [(name, None, tolerance) for tolerance in chosen]
     for name, dt, tolerance in tqdm(jobs, desc="trade-off runs", unit="run", disable=not progress):
         run = timed_run(scene, duration, integrator=name, dt=dt, tolerance=tolerance)
         if tolerance is not None:
