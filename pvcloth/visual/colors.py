@@ -95,13 +95,24 @@ def nice_ceiling(value: float) -> float:
     return 10.0 * power
 
 
+#: The percentile of a frame's values (their distance from the field's
+#: anchor) a colour range grows to: 5 % of the points must reach further
+#: before the range grows.
+RANGE_PERCENTILE = 95.0
+
+
 class ColorRange:
     """A colour range that only grows: a colour means the same value from
     the frame it first appears on (a range refitted to every frame would
     let colours drift while the values stand still).
 
-    The range is the anchor to a rounded-up extreme of everything seen (for
-    stretch, symmetric about 1); a fixed ``clim`` never changes.
+    The range is the anchor to a rounded-up reach of everything seen (for
+    stretch, symmetric about 1); a fixed ``clim`` never changes. A frame's
+    reach is the :data:`RANGE_PERCENTILE` th percentile of the points'
+    distances from the anchor, not the farthest point's: one point's spike
+    (a flag's corner whipping at 19 m/s while the rest moves under 3.4 m/s)
+    would otherwise set the range for the whole movie and darken everything
+    else. Values beyond the range take the colour map's end colour.
 
     Examples
     --------
@@ -111,6 +122,9 @@ class ColorRange:
     (0.995, 1.005)
     >>> scale.update([1.001])  # a calmer frame keeps the range
     (0.995, 1.005)
+    >>> speeds = ColorRange("speed")
+    >>> speeds.update([0.5] * 60 + [2.9] * 39 + [19.0])  # one point whips: not 20
+    (0.0, 5.0)
     """
 
     def __init__(self, field: str, clim=None):
@@ -124,7 +138,8 @@ class ColorRange:
         values = np.asarray(values, dtype=float)
         finite = values[np.isfinite(values)]
         anchor = self.style.anchor
-        reach = float(np.abs(finite - anchor).max(initial=0.0))
+        distances = np.abs(finite - anchor)
+        reach = float(np.percentile(distances, RANGE_PERCENTILE)) if distances.size else 0.0
         if reach > self.span:
             self.span = nice_ceiling(reach) if reach > 0 else 0.0
         span = self.span or (1e-3 if self.style.symmetric else 1e-6)
