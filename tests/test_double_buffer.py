@@ -79,7 +79,7 @@ def test_set_state_updates_the_mesh_a_user_holds():
         ({"positions": np.zeros((3, 3))}, "positions: expected shape"),
         ({"velocities": np.full((36, 3), np.nan)}, "velocities: every value must be finite"),
         ({"positions": np.full((36, 3), 1e9)}, "positions: each coordinate must be within"),
-        ({"velocities": np.full((36, 3), 1e5)}, "velocities: each speed must be under"),
+        ({"velocities": np.full((36, 3), 1e5)}, "velocities: each component must be within"),
         ({"time": -1.0}, "time: expected a finite time"),
         ({"steps": 2.5}, "steps: expected a whole number"),
         ({"positions": "left"}, "positions: expected"),
