@@ -36,6 +36,18 @@ TABLES = [
 ]
 
 
+#: The head of every key table: a three-column list table.
+TABLE_HEAD = [
+    ".. list-table::",
+    "   :header-rows: 1",
+    "   :widths: 20 20 60",
+    "",
+    "   * - key",
+    "     - default",
+    "     - meaning",
+]
+
+
 def _default(field: dataclasses.Field) -> str:
     if field.default is not dataclasses.MISSING:
         return repr(field.default)
@@ -56,18 +68,7 @@ def scene_keys_rst() -> list[str]:
     lines: list[str] = []
     top = NumpyDocString(spec.Scene.__doc__ or "")
     top_fields = {f.name: f for f in dataclasses.fields(spec.Scene)}
-    lines += [
-        "Top-level keys",
-        "--------------",
-        "",
-        ".. list-table::",
-        "   :header-rows: 1",
-        "   :widths: 20 20 60",
-        "",
-        "   * - key",
-        "     - default",
-        "     - meaning",
-    ]
+    lines += ["Top-level keys", "--------------", "", *TABLE_HEAD]
     for parameter in top["Parameters"]:
         field = top_fields.get(parameter.name)
         if field is None or "Spec" in parameter.type:
@@ -83,15 +84,7 @@ def scene_keys_rst() -> list[str]:
         doc = NumpyDocString(cls.__doc__ or "")
         defaults = {f.name: f for f in dataclasses.fields(cls)}
         lines += [table, "-" * len(table), "", about, "", f"(:class:`pvcloth.{name}`)", ""]
-        lines += [
-            ".. list-table::",
-            "   :header-rows: 1",
-            "   :widths: 20 20 60",
-            "",
-            "   * - key",
-            "     - default",
-            "     - meaning",
-        ]
+        lines += TABLE_HEAD
         for parameter in doc["Parameters"]:
             for key in parameter.name.split(","):
                 key = key.strip()
