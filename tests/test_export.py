@@ -311,9 +311,8 @@ def test_blender_plays_the_point_cache_on_the_base_mesh(tmp_path):
     blender = shutil.which("blender")
     if blender is None:
         pytest.skip(
-            "Blender is not installed: Debian's blender brings libtbb, which makes numba's "
-            "TBB layer loadable and slows the kernels' frames 4x (test_kernels), so CI "
-            "leaves it out; the cache is checked by an independent reader instead"
+            "Blender is not installed (CI leaves it out, a large install); the cache is "
+            "checked by an independent reader instead"
         )
     cache = export(cloth(), tmp_path / "cloth.pc2", frames=4, fps=20, progress=False)
     script = tmp_path / "play.py"

@@ -91,7 +91,7 @@ for _ in range(3):
 start = sim.state.copy()
 sim.step()
 threaded = sim.state.x.copy()
-sim.state, sim.steps = start, sim.steps - 1
+sim.set_state(start.x, start.v, start.t, steps=sim.steps - 1)
 kernels.THREADED_ROWS = 10**9  # every kernel serial from here
 sim.step()
 print(best, np.abs(sim.state.x - threaded).max(), kernels.threading_layer())
@@ -199,12 +199,14 @@ print(kernels.threading_layer(), np.median(times[2:12]), np.median(times[40:]),
 
 
 @pytest.mark.serial  # frame times early and late: a neighbour's burst would fall on one
-@pytest.mark.parametrize("layer", ["omp", "tbb", "workqueue"])
-def test_frames_do_not_slow_down_or_grow_memory_on_any_threading_layer(layer):
-    """Under TBB the threaded build once slowed from 334 to 893 ms per frame
-    over six frames while memory grew by megabytes per frame. On every
-    layer numba can load here, 50 frames at 64x64: the last ten cost at
-    most 20 % more than the first ten and memory grows by under 20 %."""
+@pytest.mark.parametrize("layer", ["omp", "workqueue"])
+def test_frames_do_not_slow_down_or_grow_memory_on_the_layers_pvcloth_picks(layer):
+    """Under TBB the threaded build slows from 154 to 465 ms per frame over
+    50 frames while its memory grows, so pvcloth never picks TBB (it comes
+    after the workqueue, which always loads; see THREADING_LAYERS). On the
+    layers it picks, where numba can load them, 50 frames at 64x64: the
+    last ten cost at most 20 % more than the first ten and memory grows by
+    under 20 %."""
     import os
     import subprocess
     import sys

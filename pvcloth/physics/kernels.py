@@ -48,11 +48,14 @@ except ImportError:  # pragma: no cover - exercised only where numba is missing
     numba = None
 
 #: Threading layers in the order pvcloth prefers them. numba's own default
-#: order puts TBB first whenever libtbb is installed; here OpenMP measured
-#: best (64x64, 50 frames: OpenMP 42-45 ms per frame and steady, TBB 31-57 ms
-#: and drifting upwards within a run, the workqueue 89-108 ms), so it is
-#: asked for first. ``NUMBA_THREADING_LAYER`` still overrides.
-THREADING_LAYERS = ["omp", "tbb", "workqueue"]
+#: order puts TBB first whenever libtbb is installed (Debian's comes with
+#: Blender, for one). Measured at 64x64 over 50 frames of the hanging scene
+#: (``tests/test_kernels.py``'s MANY_FRAMES): OpenMP 21 ms per frame and
+#: steady, the workqueue 94-100 ms and steady, TBB 154 ms for the first
+#: frames and 465 ms for the last, its memory growing. So TBB comes last:
+#: the workqueue always loads, and TBB runs only when asked for by name.
+#: ``NUMBA_THREADING_LAYER`` still overrides.
+THREADING_LAYERS = ["omp", "workqueue", "tbb"]
 if numba is not None and "NUMBA_THREADING_LAYER_PRIORITY" not in os.environ:
     numba.config.THREADING_LAYER_PRIORITY = THREADING_LAYERS
 
