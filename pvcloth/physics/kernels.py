@@ -130,9 +130,35 @@ class SpringPlan:
         # Each block's working copy of its rows (6 components in, 3 forces
         # out) and one row of spring forces, allocated once: allocated per
         # call they were fresh pages at every step on big grids.
-        rows = int(np.diff(self.blocks).max()) + 3
+        rows = int(np.diff(self.blocks).max()) + 4
         self.scratch = np.empty((self.blocks.size - 1, 9, rows, nx))
         self.row = np.empty((self.blocks.size - 1, 3, nx))
+        self.set_plate(None)
+
+    def set_plate(self, matrix) -> None:
+        """Take plate bending's matrix ``Q`` (:mod:`pvcloth.physics.bending`,
+        a sorted CSR ``(N, N)``), or ``None`` for none: the spring pass then
+        adds ``-Q x`` too. Where ``Q``'s stencil is the same at every point
+        (two or more points from every edge) it is applied from its six
+        distinct values; nearer the edges from ``Q``'s rows. :attr:`plate`
+        holds both, as the kernels take them."""
+        ny, nx = self.shape
+        coefficients = np.zeros(7)  # the six values, then 1 when there is a plate
+        if matrix is None:
+            empty = np.zeros(1, dtype=np.int64)
+            self.plate = (coefficients, empty, empty, np.zeros(0))
+            return
+        coefficients[6] = 1.0
+        j, i = np.divmod(np.arange(ny * nx), nx)
+        inner = np.flatnonzero((i >= 2) & (i < nx - 2) & (j >= 2) & (j < ny - 2))
+        if inner.size:
+            p = int(inner[0])
+            span = slice(matrix.indptr[p], matrix.indptr[p + 1])
+            row = dict(zip(matrix.indices[span], matrix.data[span], strict=True))
+            coefficients[:6] = [row[p + k] for k in (0, 1, 2, nx, 2 * nx, nx + 1)]
+        # int64 indices, as without a plate: one compiled signature for both
+        indptr, indices = (a.astype(np.int64) for a in (matrix.indptr, matrix.indices))
+        self.plate = (coefficients, indptr, indices, matrix.data)
 
     def _groups(self):
         return [g for family in self.springs for g in family.groups]
@@ -153,14 +179,21 @@ class SpringPlan:
 if numba is not None:
 
     @njit(fastmath=FASTMATH, cache=True, nogil=True)
-    def _spring_block(x3, v3, f3, stiffness, damping, rest, geometry, extent, lo, hi, scratch, tmp):
+    def _spring_block(
+        x3, v3, f3, stiffness, damping, rest, geometry, extent, plate, lo, hi, scratch, tmp
+    ):  # plate: (coefficients, indptr, indices, data), see SpringPlan.set_plate
         """Springs whose end a lies in rows ``[lo, hi)``, computed on a copy of
         the rows they touch laid out component by component (x, y, z, vx, vy,
         vz rows, in ``scratch[:6]``), where every load in the inner loop is
         contiguous; the forces, summed in ``scratch[6:]``, are added back to
-        ``f3`` at the end. ``tmp`` holds one row of spring forces."""
+        ``f3`` at the end. ``tmp`` holds one row of spring forces. With plate
+        bending (``plate[0][6] == 1``), ``-Q x`` at the block's points:
+        its stencil on the copy where it is the same at every point (two or
+        more points from every edge), ``Q``'s rows (CSR) nearer the edges."""
         ny, nx, _ = x3.shape
-        r0, r1 = max(lo - 1, 0), min(hi + 2, ny)
+        # Rows copied from two before the block (the plate's stencil reads
+        # them); forces are written from one row before it, as the phases need.
+        r0, r1 = max(lo - 2, 0), min(hi + 2, ny)
         s = scratch[:6]
         for r in range(r1 - r0):
             xr, vr = x3[r0 + r], v3[r0 + r]
@@ -203,7 +236,53 @@ if numba is not None:
                     fb = f[d, jb, b1:]
                     for q in range(cols):
                         fb[q] -= tmp[d, q]
-        for r in range(r1 - r0):
+        coefficients, indptr, indices, data = plate
+        if coefficients[6] != 0.0:
+            # -Q x at the points whose 13-point stencil has its inner values
+            # (pvcloth.physics.bending): centre, row neighbours at 1 and 2,
+            # column neighbours at 1 and 2, and the four diagonal ones.
+            c0, u1, u2 = coefficients[0], coefficients[1], coefficients[2]
+            v1, v2, dg = coefficients[3], coefficients[4], coefficients[5]
+            for j in range(max(lo, 2), min(hi, ny - 2)):
+                r = j - r0
+                for d in range(3):
+                    xm2, xm1, x0, xp1, xp2 = (
+                        s[d, r - 2],
+                        s[d, r - 1],
+                        s[d, r],
+                        s[d, r + 1],
+                        s[d, r + 2],
+                    )
+                    fd = f[d, r]
+                    for i in range(2, nx - 2):
+                        fd[i] -= (
+                            c0 * x0[i]
+                            + u1 * (x0[i - 1] + x0[i + 1])
+                            + u2 * (x0[i - 2] + x0[i + 2])
+                            + v1 * (xm1[i] + xp1[i])
+                            + v2 * (xm2[i] + xp2[i])
+                            + dg * (xm1[i - 1] + xm1[i + 1] + xp1[i - 1] + xp1[i + 1])
+                        )
+            # the points within two of an edge: their rows of Q
+            flat = x3.reshape(ny * nx, 3)
+            for j in range(lo, hi):
+                edge_row = j < 2 or j >= ny - 2
+                for i in range(nx):
+                    if not edge_row and 2 <= i < nx - 2:
+                        continue
+                    p = i + nx * j
+                    s0 = 0.0
+                    s1 = 0.0
+                    s2 = 0.0
+                    for k in range(indptr[p], indptr[p + 1]):
+                        q, a = indices[k], data[k]
+                        s0 += a * flat[q, 0]
+                        s1 += a * flat[q, 1]
+                        s2 += a * flat[q, 2]
+                    f[0, j - r0, i] -= s0
+                    f[1, j - r0, i] -= s1
+                    f[2, j - r0, i] -= s2
+        for r in range(max(lo - 1, 0) - r0, r1 - r0):
             fr = f3[r0 + r]
             for i in range(nx):
                 fr[i, 0] += f[0, r, i]
@@ -211,7 +290,7 @@ if numba is not None:
                 fr[i, 2] += f[2, r, i]
 
     def _spring_forces(
-        x3, v3, f3, stiffness, damping, rest, geometry, extent, blocks, scratch, row
+        x3, v3, f3, stiffness, damping, rest, geometry, extent, plate, blocks, scratch, row
     ):
         """Add every spring's force to ``f3``: blocks of rows in two phases,
         block ``b`` working in ``scratch[b]`` and ``row[b]``."""
@@ -228,6 +307,7 @@ if numba is not None:
                     rest,
                     geometry,
                     extent,
+                    plate,
                     blocks[b],
                     blocks[b + 1],
                     scratch[b],
@@ -317,7 +397,26 @@ if numba is not None:
             out[q, 1] -= scale * dy
             out[q, 2] -= scale * dz
 
+    def _subtract_product(indptr, indices, data, x, f):
+        """``f -= A x`` for a CSR matrix ``A`` ``(N, N)`` (``indptr``,
+        ``indices``, ``data``) and ``x``, ``f`` ``(N, 3)``: row by row, each
+        row's three sums written once (rows are independent: threads need
+        no care)."""
+        for r in prange(indptr.size - 1):
+            s0 = 0.0
+            s1 = 0.0
+            s2 = 0.0
+            for k in range(indptr[r], indptr[r + 1]):
+                c, a = indices[k], data[k]
+                s0 += a * x[c, 0]
+                s1 += a * x[c, 1]
+                s2 += a * x[c, 2]
+            f[r, 0] -= s0
+            f[r, 1] -= s1
+            f[r, 2] -= s2
+
     _SPRINGS = _compile(_spring_forces)
+    _PRODUCT = _compile(_subtract_product)
     _BODY = _compile(_body_forces)
     _KICK = _compile(_kick_drift)
 
@@ -368,7 +467,8 @@ def use_threads(count: int) -> None:
 
 
 def spring_forces(plan: SpringPlan, x, v, f) -> None:
-    """Add all springs' forces to ``f`` (``(N, 3)`` arrays, C-contiguous)."""
+    """Add all springs' forces to ``f`` (``(N, 3)`` arrays, C-contiguous), and
+    plate bending's when the plan has it (:meth:`SpringPlan.set_plate`)."""
     if plan.empty:
         return
     shape = plan.shape + (3,)
@@ -381,10 +481,18 @@ def spring_forces(plan: SpringPlan, x, v, f) -> None:
         plan.rest,
         plan.geometry,
         plan.extent,
+        plan.plate,
         plan.blocks,
         plan.scratch,
         plan.row,
     )
+
+
+def subtract_product(matrix, x, f, rows: int) -> None:
+    """``f -= matrix @ x`` (``matrix`` a sorted CSR ``(N, N)``, ``x`` and
+    ``f`` ``(N, 3)``), compiled; threaded on grids of ``rows`` from
+    :data:`THREADED_ROWS` up."""
+    _pick(_PRODUCT, rows)(matrix.indptr, matrix.indices, matrix.data, x, f)
 
 
 def body_forces(v, f, mass, gravity, air: float, shape) -> None:

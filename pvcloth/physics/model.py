@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+from pvcloth.physics.bending import PlateBending
 from pvcloth.physics.forces import AirDamping, ForceTerm, Gravity, Wind
 from pvcloth.physics.grid import initial_positions, lumped_masses
 from pvcloth.physics.kernels import (
@@ -22,6 +23,7 @@ from pvcloth.physics.kernels import (
     spring_forces,
     spring_projection,
     spring_projection_numpy,
+    subtract_product,
 )
 from pvcloth.physics.obstacles import Contacts, build_obstacle
 from pvcloth.physics.self_collision import SelfCollision
@@ -46,6 +48,9 @@ class Model:
         Points pinned by the scene.
     springs : list of Springs
         The spring families the scene asks for (see :mod:`pvcloth.physics.springs`).
+    bending : PlateBending or None
+        The sheet's plate bending (:mod:`pvcloth.physics.bending`), ``None``
+        unless the cloth has a bending rigidity.
     gravity : Gravity or None
     air : AirDamping or None
     wind : Wind or None
@@ -79,11 +84,14 @@ class Model:
     obstacles: list = field(default_factory=list)
     backend: str = "numpy"
     self_collision: SelfCollision | None = None
+    bending: PlateBending | None = None
 
     def __post_init__(self):
         self.serial = self.revision = next(REVISIONS)
         self._table: SpringTable | None = None
         self._plan = SpringPlan(self.springs, self.shape) if self.backend == "numba" else None
+        if self._plan is not None and self.bending is not None:
+            self._plan.set_plate(self.bending.matrix)
 
     @property
     def n_points(self) -> int:
@@ -91,9 +99,9 @@ class Model:
 
     @property
     def forces(self) -> list[ForceTerm]:
-        """Every force term, springs first."""
-        others = [self.gravity, self.air, self.wind]
-        return [*self.springs, *(term for term in others if term is not None)]
+        """Every force term: springs, plate bending, then the other forces."""
+        bending = [self.bending] if self.bending is not None else []
+        return [*self.springs, *bending, *self.other_forces]
 
     @property
     def other_forces(self) -> list[ForceTerm]:
@@ -154,12 +162,15 @@ class Model:
         at positions ``x`` (m) and velocities ``v`` (m/s)."""
         if self._plan is not None:
             f = np.empty_like(x) if out is None else out
-            # Gravity and air damping are written over f, the springs add on
-            # in compiled kernels, the wind in NumPy.
+            # Gravity and air damping are written over f, the springs and the
+            # plate bending add on in compiled kernels, the wind in NumPy.
             gravity = self.gravity.acceleration if self.gravity is not None else _NO_GRAVITY
             air = self.air.rate if self.air is not None else 0.0
             body_forces(v, f, self.mass, gravity, air, self.shape)
             spring_forces(self._plan, x, v, f)
+            if self.bending is not None:
+                if self._plan.empty:  # no spring pass to ride on: the whole product
+                    subtract_product(self.bending.matrix, x, f, self.shape[0])
             if self.wind is not None:
                 self.wind.accumulate(x, v, f)
             return f
@@ -221,7 +232,7 @@ class Model:
         return touched
 
     def potential_energy(self, x: np.ndarray) -> float:
-        """Stored energy in joules (springs and gravity)."""
+        """Stored energy in joules (springs, plate bending and gravity)."""
         return sum(term.potential_energy(x) for term in self.forces)
 
     def kinetic_energy(self, v: np.ndarray) -> float:
@@ -321,6 +332,8 @@ def build_model(scene, backend: str | None = None) -> Model:
         if term.count:
             springs.append(term)
     gravity, air, wind = _body_terms(scene, mass, (ny, nx))
+    rigidity = cloth.bending_rigidity
+    bending = PlateBending((ny, nx), spacing, rigidity) if rigidity > 0 else None
     return Model(
         (ny, nx),
         x.reshape(-1, 3).copy(),
@@ -333,6 +346,7 @@ def build_model(scene, backend: str | None = None) -> Model:
         [build_obstacle(spec) for spec in scene.obstacles],
         resolve_backend(backend),
         _self_collision(scene),
+        bending,
     )
 
 

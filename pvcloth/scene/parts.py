@@ -13,7 +13,9 @@ not per spring, so refining the grid approximates the same cloth.
   gets ``k = shear`` (independent of the cell size, as for a square cell).
 - ``bending`` (N/m) is scaled like ``stretch`` over springs two cells long.
   Bending springs resist folding only through second-order length change, so
-  they are a regulariser, not a converging plate model (see the docs).
+  they are a regulariser, not a converging plate model: for a fabric's
+  bending, give the cloth's ``bending_rigidity`` (N m) instead
+  (:mod:`pvcloth.physics.bending`).
 - Springs that lie on the cloth's border stand for half a strip and get half
   the stiffness and damping (the trapezoid rule), as do the border masses.
 - ``damping`` (N s/m) of each family is scaled like its stiffness.
@@ -40,6 +42,8 @@ MIN_LENGTH, MAX_LENGTH = 1e-4, 1e4
 MAX_WIND, MAX_GRAVITY = 340.0, 1e4
 #: Largest stiffness (N/m), damping (N s/m), mass (kg) and air damping (1/s).
 MAX_STIFFNESS, MAX_DAMPING, MAX_MASS, MAX_AIR_DAMPING = 1e12, 1e9, 1e6, 1e6
+#: Largest bending rigidity (N m): a steel sheet a millimetre thick has 19.
+MAX_BENDING_RIGIDITY = 1e3
 #: Smallest cloth mass (kg): below it the stable step of any stiffness is
 #: too small to simulate a frame.
 MIN_MASS = 1e-9
@@ -75,6 +79,11 @@ class ClothSpec:
         ``"horizontal"`` lays it flat in the x-y plane (j runs along y).
     center : (float, float, float)
         Position of the cloth's centre in metres (each within +-1e4).
+    bending_rigidity : float
+        The sheet's resistance to bending, in N m (0 to 1e3; cotton is about
+        1.7e-4): the moment per metre of width that bends it to a curvature
+        of 1/m. 0 (the default) builds no plate bending
+        (:mod:`pvcloth.physics.bending`); the fabric presets set it.
 
     Examples
     --------
@@ -88,6 +97,7 @@ class ClothSpec:
     mass: float = 0.2
     orientation: str = "vertical"
     center: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    bending_rigidity: float = 0.0
 
     def __post_init__(self):
         _set(self, "size", vector("size", self.size, 2, **_LENGTH))
@@ -103,6 +113,13 @@ class ClothSpec:
         _set(self, "mass", real("mass", self.mass, minimum=MIN_MASS, maximum=MAX_MASS))
         _set(self, "orientation", choice("orientation", self.orientation, ORIENTATIONS))
         _set(self, "center", vector("center", self.center, 3, **_POSITION))
+        _set(
+            self,
+            "bending_rigidity",
+            real(
+                "bending_rigidity", self.bending_rigidity, minimum=0.0, maximum=MAX_BENDING_RIGIDITY
+            ),
+        )
 
 
 @dataclass(frozen=True)

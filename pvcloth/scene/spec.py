@@ -241,7 +241,14 @@ class Scene:
         if "cloth.material" in changes:  # the preset first, then what else is given
             size = changes.get("cloth.size", self.cloth.size)
             rest = {k: v for k, v in changes.items() if k != "cloth.material"}
-            changes = {**preset(changes["cloth.material"], tuple(size)), **rest}
+            values = preset(changes["cloth.material"], tuple(size))
+            # a family the preset leaves out stays when the changes give it
+            values = {
+                k: v
+                for k, v in values.items()
+                if v is not None or not any(key.startswith(f"{k}.") or key == k for key in rest)
+            }
+            changes = {**values, **rest}
         data = self.to_dict()
         for key, value in changes.items():
             assign(data, key, value)

@@ -38,7 +38,9 @@ class BackwardEuler(Integrator):
     ``k + c/h`` and rest length ``(k rest + c/h L_0) / (k + c/h)``. Air
     damping is ``A = sum r m |t - x|^2 / (2 h)``; gravity and the wind are
     ``f``, the wind (which has no potential) taken at an anchor iterate and
-    re-taken until it agrees with the end of the step.
+    re-taken until it agrees with the end of the step. Plate bending
+    (:mod:`pvcloth.physics.bending`) adds ``sum_c t_c^T Q t_c / 2``, whose
+    Hessian ``Q`` is constant and positive semi-definite.
 
     Each Newton iteration solves ``(M (1 + r h) + h^2 H) dx = -M r_psi``
     with ``H`` the springs' Hessian: clamped to positive semi-definite far
@@ -186,6 +188,8 @@ class _StepPotential:
             (table.stiffness * table.rest + viscous * start) / np.maximum(self.stiffness, 1e-300),
             table.rest,
         )  # (S,) m
+        # Plate bending: energy x^T Q x / 2 per coordinate (or None).
+        self.bending = model.bending.matrix if model.bending is not None else None
         self.gravity = np.zeros_like(x)  # (N, 3) N
         model.add_gravity(x, v, self.gravity)
         self.constant = self.gravity.copy()  # gravity, plus the wind at the anchor
@@ -219,7 +223,10 @@ class _StepPotential:
         springs = 0.5 * float(
             self.stiffness @ ((length_trial - length_t) * (length_trial + length_t - 2 * self.rest))
         )
-        return inertia + air + springs - float(np.vdot(self.constant, move))
+        bending = 0.0
+        if self.bending is not None:  # x'Qx/2 - t'Qt/2 = (x - t)'Q(x + t)/2, Q symmetric
+            bending = 0.5 * float(np.vdot(move, self.bending @ (trial + t)))
+        return inertia + air + springs + bending - float(np.vdot(self.constant, move))
 
     def residual(self, t: np.ndarray) -> np.ndarray:
         """``r(t) = h^2 M^-1 grad Psi`` ``(N, 3)`` in metres, zero at pinned
@@ -230,6 +237,8 @@ class _StepPotential:
         pull = self.stiffness * (length - self.rest) / np.maximum(length, TINY_LENGTH)
         on_a = d * pull[:, None]  # (S, 3) N, on end a (and minus it on end b)
         force = self.constant - (self.rate / dt * mass)[:, None] * (t - self.x)
+        if self.bending is not None:
+            force -= self.bending @ t
         n = t.shape[0]
         for axis in range(3):
             force[:, axis] += np.bincount(self.a, on_a[:, axis], minlength=n)
@@ -245,6 +254,8 @@ class _StepPotential:
         dt, mass = self.dt, self.model.mass
         blocks = stiffness_blocks(t[self.b] - t[self.a], self.rest, self.stiffness, exact)
         dfdx = self.pattern.assemble(blocks)
+        if self.bending is not None:
+            dfdx = dfdx - self.model.bending.hessian()
         free = np.repeat(~pinned, 3)
         diagonal = np.repeat(mass * (1.0 + self.rate * dt), 3)
         return (sp.diags(diagonal) - dt * dt * dfdx).tocsr()[free][:, free]
