@@ -165,7 +165,7 @@ def write(results, checks, rounds, have_taichi, out: Path, arguments: list[str])
         "",
         provenance(),
         "",
-        f"`{command}` on {platform.node()} ({os.cpu_count()} cores), "
+        f"`{command}` ({os.cpu_count()} cores), "
         f"Python {platform.python_version()}, numpy {np.__version__}, numba {numba.__version__}"
         + (f", taichi {__import__('taichi').__version__}" if have_taichi else "")
         + f". Hanging scene (12 springs per point, gravity, air damping, two pins), "

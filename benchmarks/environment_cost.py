@@ -11,7 +11,6 @@ Run:  python benchmarks/environment_cost.py   (writes benchmarks/results/environ
 
 from __future__ import annotations
 
-import platform
 import time
 from pathlib import Path
 
@@ -73,7 +72,7 @@ def main() -> None:
         "",
         provenance(),
         "",
-        f"`python benchmarks/environment_cost.py` on {platform.node()}, numpy "
+        f"`python benchmarks/environment_cost.py`, numpy "
         f"{np.__version__}. Hanging scene, symplectic Euler at the scene's step; median of "
         f"{ROUNDS} interleaved rounds. *Terms* counts force terms plus obstacles that "
         "the model built (`pvcloth info` lists them): the plain scene builds neither wind "

@@ -18,7 +18,6 @@ Run:  python benchmarks/finite_check.py   (writes benchmarks/results/finite_chec
 from __future__ import annotations
 
 import math
-import platform
 import time
 from pathlib import Path
 
@@ -99,7 +98,7 @@ def main() -> None:
         "",
         provenance(),
         "",
-        f"`python benchmarks/finite_check.py` on {platform.node()} (serial builds), median of "
+        f"`python benchmarks/finite_check.py` (serial builds), median of "
         f"{ROUNDS} rounds of {CALLS} calls, builds interleaved.",
         "",
         "| points per side | build | ms per call | ratio to the earlier kernel | finds a NaN |",

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
 import re
 import subprocess
 import sys
@@ -59,7 +58,7 @@ def main() -> None:
         "",
         provenance(),
         "",
-        f"`python benchmarks/fuzz.py --examples {args.examples}` on {platform.node()}: "
+        f"`python benchmarks/fuzz.py --examples {args.examples}`: "
         f"{total:,} generated cases in {wall:.0f} s; pytest says: `{summary}`.",
         "",
         "A case passes when it ends in success or in pvcloth's own error (exit code 2 with a "

@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import platform
 import time
 from pathlib import Path
 
@@ -124,7 +123,7 @@ def main() -> None:
         "",
         provenance(),
         "",
-        f"`python benchmarks/implicit_crossover.py` on {platform.node()}: hanging scene, all "
+        f"`python benchmarks/implicit_crossover.py`: hanging scene, all "
         "spring stiffnesses and dampings scaled together; explicit methods at 0.9 of their "
         f"stable step, implicit Euler at 1/60 s; {DURATION:g} s simulated after 0.05 s. Rate = "
         "simulated seconds per wall second (higher is faster). Errors: RMS point distance from "

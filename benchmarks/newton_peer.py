@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
-import platform
 import statistics
 import sys
 import time
@@ -202,8 +201,8 @@ def main() -> None:
         "",
         provenance(),
         "",
-        f"`python benchmarks/newton_peer.py{''.join(' ' + a for a in sys.argv[1:])}` on "
-        f"{platform.node()}{versions}: the cotton scene at {n}x{n} points, "
+        f"`python benchmarks/newton_peer.py{''.join(' ' + a for a in sys.argv[1:])}` "
+        f"{versions}: the cotton scene at {n}x{n} points, "
         f"{args.seconds:g} s of cloth after {WARMUP:g} s, one method after another in one "
         "process. ms = median wall time per 1/60 s frame; cloth s per wall s = simulated "
         "over wall time; sag = lowest point below the pins (m); strain = edge length over "

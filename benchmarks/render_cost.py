@@ -59,7 +59,7 @@ def main() -> None:
         "",
         provenance(),
         "",
-        f"`python benchmarks/render_cost.py --frames {args.frames}` on {platform.node()} "
+        f"`python benchmarks/render_cost.py --frames {args.frames}` "
         f"({platform.machine()}), pyvista {pyvista.__version__}, "
         "off-screen EGL (Mesa llvmpipe, software). Median ms per frame; "
         "physics is one frame (1/30 s) of symplectic Euler at the automatic step "

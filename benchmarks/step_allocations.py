@@ -77,7 +77,7 @@ def main() -> None:
         "",
         provenance(),
         "",
-        f"`python benchmarks/step_allocations.py` on {platform.node()} "
+        f"`python benchmarks/step_allocations.py` "
         f"({platform.processor() or platform.machine()}): hanging scene, compiled backend, "
         f"{args.steps} steps each, both ways in one process. *new states*: every step "
         "allocates its result (pvcloth before the double buffer); *reused*: the state a "

@@ -11,7 +11,6 @@ Run:  python benchmarks/sweep_scaling.py   (writes benchmarks/results/sweep_scal
 from __future__ import annotations
 
 import os
-import platform
 import tempfile
 import time
 from pathlib import Path
@@ -64,7 +63,7 @@ def main() -> None:
         "",
         provenance(),
         "",
-        f"`python benchmarks/sweep_scaling.py` on {platform.node()} ({os.cpu_count()} cores): "
+        f"`python benchmarks/sweep_scaling.py` ({os.cpu_count()} cores): "
         f"{' '.join('--set ' + s for s in SETS)} on the hanging scene at 12x12, "
         f"{DURATION:g} s simulated per run, single-threaded worker processes.",
         "",

@@ -16,7 +16,6 @@ Run:  python benchmarks/view_cost.py [--frames 20] [--sizes 32 64] [--out FILE]
 from __future__ import annotations
 
 import argparse
-import platform
 import sys
 import tempfile
 import time
@@ -85,7 +84,7 @@ def main() -> None:
         "",
         provenance(),
         "",
-        f"`{command}` on {platform.node()}, pyvista {pyvista.__version__}, off-screen EGL "
+        f"`{command}`, pyvista {pyvista.__version__}, off-screen EGL "
         f"(Mesa llvmpipe, software GL), FXAA on, hanging scene, {frames} frames per row. "
         "Drawing: median ms per frame besides the simulation's own steps (meshes and field "
         "updated, rendered, read back; for `error`, the RK4 reference run advanced too). "

@@ -23,6 +23,7 @@ ROOT = Path(__file__).resolve().parent.parent
 RUNS = {
     "adaptive.py": ([], "adaptive.md"),
     "bending_cost.py": ([], "bending_cost.md"),
+    "bending_models.py": ([], "bending_models.md"),
     "view_cost.py": ([], "view_cost.md"),
     "blas_threads.py": ([], "blas_threads.md"),
     # the copy (no .git) against itself, in place of two commits

@@ -306,3 +306,25 @@ def test_a_checkpoint_resumes_a_bending_run_bit_for_bit(tmp_path):
     resumed.advance(0.01)
     assert resumed.scene.cloth.bending_rigidity == MATERIALS["denim"].bending_rigidity
     assert np.array_equal(resumed.positions, sim.positions)
+
+
+def test_adaptive_steps_see_the_plate():
+    """rk23's error estimate includes the plate: on a sheet whose plate is its
+    stiffest part, the error after t follows ``tolerance * t`` against a
+    fine RK4 reference, and shrinks with the tolerance."""
+    scene = pvcloth.Scene(
+        cloth=pvcloth.ClothSpec(size=(0.2, 0.2), resolution=(11, 11), bending_rigidity=1e-3),
+        springs=pvcloth.SpringsSpec(structural=pvcloth.SpringSpec(10.0), shear=None, bending=None),
+    )
+    t = 0.1
+    reference = pvcloth.Simulation(scene, integrator="rk4", dt=t / 4000, stability="ignore")
+    reference.advance(t)
+    errors = []
+    for tolerance in (1e-3, 1e-5):
+        sim = pvcloth.Simulation(
+            scene.with_overrides({"solver.integrator": "rk23", "solver.tolerance": tolerance})
+        )
+        sim.advance(t)
+        errors.append(float(np.linalg.norm(sim.positions - reference.positions, axis=1).max()))
+        assert errors[-1] < tolerance * t, (tolerance, errors[-1])
+    assert errors[1] < 0.1 * errors[0]

@@ -120,17 +120,19 @@ for cells in (12, 24, 48):
     assert droop(lines["springs", cells]) > elastica + 20
 assert droop(lines["springs", 48]) > droop(lines["springs", 12])
 
-fig, ax = plt.subplots(figsize=(7, 4.5))
-ax.plot(100 * reach, -100 * drop, color="black", lw=4, alpha=0.3, label="elastica")
+fig, ax = plt.subplots(figsize=(8, 4.5))
+markers = {12: "o", 24: "s", 48: "^"}
 for (bending, cells), line in lines.items():
-    style = {"plate": "-", "springs": "--"}[bending]
-    ax.plot(
-        100 * line[1:, 0], 100 * line[1:, 2], style, marker=".", label=f"{bending}, {cells} cells"
-    )
+    if bending == "plate":  # hollow markers: the three grids lie on one curve
+        style = {"ls": "none", "marker": markers[cells], "mfc": "none", "ms": 9 - cells / 8}
+    else:
+        style = {"ls": "--", "marker": "."}
+    ax.plot(100 * line[1:, 0], 100 * line[1:, 2], label=f"{bending}, {cells} cells", **style)
+ax.plot(100 * reach, -100 * drop, color="black", lw=1.5, label="elastica", zorder=5)
 ax.set_xlabel("along the strip (cm)")
 ax.set_ylabel("height (cm)")
 ax.set_aspect("equal")
 ax.set_title(f"Cotton strip overhanging 2c = {100 * overhang:.1f} cm")
-ax.legend(fontsize=8, ncol=2)
+ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5))
 fig.tight_layout()
 plt.show()

@@ -48,10 +48,24 @@ stiffness. The rest shape is flat: curved rest shapes need hinges on the
 dihedral angles (Grinspun et al. 2003, Bridson et al. 2003), which pvcloth
 does not have.
 
+**Why not hinges.** The common alternative puts a hinge on every interior
+edge of a triangulation, with energy in the dihedral angle (Grinspun et al.
+2003, Bridson et al. 2003). Measured on this grid before choosing
+(``benchmarks/bending_models.py``): with each cell split along a diagonal,
+hinges hold three times as much energy for a bend along that diagonal as
+for one along the rows, the columns or the other diagonal, on every grid
+from 11 to 81 points a side, so a strip cut on the bias would be stiffer
+than one cut along the threads; the plate holds the same energy in every
+direction, within 1.3 % of ``B kappa^2 / 2`` at 81 points. Hinges are also
+nonlinear: their Hessian changes every step (``fast_mass_spring`` could not
+keep one factor), and one force evaluation in NumPy cost 64 to 82 times
+the plate's sparse product.
+
 **Its cost and its place.** ``Q`` has 13 entries per row (the grid's
-biharmonic stencil). The compiled backend applies it in a threaded loop
-(:func:`pvcloth.physics.kernels.subtract_product`), NumPy through SciPy's
-sparse product.
+biharmonic stencil). The compiled backend applies it inside the threaded
+spring pass (:mod:`pvcloth.physics.kernels`), NumPy through SciPy's sparse
+product; per step that costs 0.6 to 1.06 times what bending springs did
+(``benchmarks/bending_cost.py``).
 """
 
 from __future__ import annotations
