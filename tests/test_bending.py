@@ -84,6 +84,9 @@ def test_rigid_motions_store_nothing_and_forces_are_minus_the_energys_gradient(r
     [
         (70, 66),
         (4, 9),  # every point within two of an edge
+        (9, 4),
+        (5, 2),
+        (3, 12),
         # threads: the serial tier runs without pytest-xdist, whose workers
         # get one thread each
         pytest.param((130, 128), marks=pytest.mark.serial),
@@ -184,7 +187,9 @@ def cantilever(cells: int, overhang: float, integrator: str = "backward_euler", 
     assert sim.scene.cloth.bending_rigidity == COTTON_RIGIDITY
     for _ in range(40):  # 0.5 s backward Euler steps: at rest in about 20
         sim.step()
-    assert np.abs(sim.velocities).max() < 1e-5
+    # at rest: what is left moves the tip by under 1e-4 degrees a step, far
+    # below the differences between the grids the convergence test orders
+    assert np.abs(sim.velocities).max() < 1e-7
     x = sim.positions.reshape(ny, nx, 3)
     clamp = 0.5 * (x[:, 0] + x[:, 1]).mean(axis=0)
     chord = x[:, -1].mean(axis=0) - clamp
@@ -195,7 +200,8 @@ def test_a_cotton_strip_droops_as_the_heavy_elastica_says():
     """The quick twin of the validation test below: one grid, two overhangs."""
     for ratio in (1.0, 2.0):
         droop, _ = cantilever(12, ratio * BENDING_LENGTH)
-        assert droop == pytest.approx(elastica(ratio)[0], abs=2.0)
+        # within 0.05 degrees (the issue asked for 2; 0.02 is measured)
+        assert droop == pytest.approx(elastica(ratio)[0], abs=0.05)
 
 
 @pytest.mark.validation  # 48 cells take seconds
@@ -205,7 +211,7 @@ def test_the_droop_converges_to_the_elastica_at_every_resolution():
         errors = [
             abs(cantilever(cells, ratio * BENDING_LENGTH)[0] - reference) for cells in (12, 24, 48)
         ]
-        assert max(errors) <= 2.0, errors
+        assert max(errors) <= 0.05, errors
         assert errors[0] > errors[1] > errors[2], errors
 
 
@@ -267,10 +273,9 @@ def test_fast_mass_spring_rests_where_backward_euler_rests():
 @pytest.mark.parametrize("material", sorted(MATERIALS))
 def test_each_preset_takes_the_mean_of_its_fifteen_bending_samples(material):
     samples = np.array(BENDING_SAMPLES[material])
-    assert samples.shape == (3, 5)  # warp, weft, bias; five curvatures
+    assert samples.shape == (3, 5)  # warp, bias, weft; five curvatures
     rigidity = MATERIALS[material].bending_rigidity
-    assert rigidity == pytest.approx(samples.mean(), rel=5e-3)
-    assert samples.min() < rigidity < samples.max()
+    assert rigidity == pytest.approx(samples.mean(), rel=5e-3)  # three figures
     scene = pvcloth.Scene.from_dict({"cloth": {"material": material}})
     assert scene.cloth.bending_rigidity == rigidity
     assert scene.springs.bending is None  # plate bending, not springs

@@ -7,7 +7,7 @@ simulator (one file per fabric, named below). Each file holds the areal
 density; at six strain levels, the membrane stiffnesses ``c11`` (warp),
 ``c22`` (weft), ``c12`` (coupling) and ``c33`` (shear) in N/m; and bending
 rigidities in N m at five curvatures in each of three directions (warp,
-weft, bias: :data:`BENDING_SAMPLES`). pvcloth's material is isotropic and
+bias, weft: :data:`BENDING_SAMPLES`). pvcloth's material is isotropic and
 linear, so each fabric is reduced to
 
 - ``stretch``: the mean over the six strain levels of ``(c11 + c22) / 2``;
@@ -80,7 +80,8 @@ class Fabric:
 
 
 #: The measured bending rigidities (N m), as the data set's files give them:
-#: rows warp, weft and bias; columns five curvatures, increasing.
+#: rows at 0 (warp), 45 (bias) and 90 degrees (weft), the order ARCSim
+#: interpolates them in; columns five curvatures, increasing.
 BENDING_SAMPLES: dict[str, tuple[tuple[float, ...], ...]] = {
     "cotton": (
         (125.409805e-6, 167.284561e-6, 215.412750e-6, 215.090790e-6, 223.861038e-6),
