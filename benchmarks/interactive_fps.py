@@ -10,6 +10,9 @@ step, or 1/60 s for implicit ones), lets it run, and measures:
 - the real-time fraction: simulated seconds over wall seconds;
 - the longest physics chunk (work that runs beside the drawing).
 
+With ``--wind`` the wind blows from the start, at what the window's ``w``
+key turns on in a scene without wind of its own.
+
 With ``--drag`` a point in the lower half of the cloth is grabbed once the
 warm-up is over and carried round a circle of 80 pixels' radius every 2 s
 (mouse events into the window's interactor, as the mouse gives them) for
@@ -17,7 +20,7 @@ the whole measurement, then let go.
 
 Run:  xvfb-run -a -s "-screen 0 1280x1024x24" python benchmarks/interactive_fps.py
       [--scene data/scenes/hanging.toml] [--sizes 32 64] [--seconds 6]
-      [--integrators ...] [--drag] [--size 1024x768] [--out FILE]
+      [--integrators ...] [--wind] [--drag] [--size 1024x768] [--out FILE]
       (writes benchmarks/results/interactive_fps.md)
 """
 
@@ -33,7 +36,7 @@ from provenance import provenance
 
 import pvcloth
 from pvcloth.visual.interaction import world_to_display
-from pvcloth.visual.window import ClothApp
+from pvcloth.visual.window import DEFAULT_WIND, ClothApp
 
 HERE = Path(__file__).parent
 WARM_UP = 1.0  # wall seconds before measuring (compilation, first chunks)
@@ -108,10 +111,15 @@ def main() -> None:
         default=sorted(n for n, cls in pvcloth.INTEGRATORS.items() if cls.interactive),
     )
     parser.add_argument("--drag", action="store_true", help="drag a point all the while")
+    parser.add_argument(
+        "--wind", action="store_true", help="wind from the start (the scene's, or the w key's)"
+    )
     parser.add_argument("--size", default="1024x768", help="window WIDTHxHEIGHT")
     parser.add_argument("--out", type=Path, default=HERE / "results" / "interactive_fps.md")
     args = parser.parse_args()
     base = pvcloth.load_scene(args.scene)
+    if args.wind and base.wind is None:
+        base = base.replace(wind=DEFAULT_WIND)
     size = tuple(int(v) for v in args.size.split("x"))
     rows = []
     for n in args.sizes:
@@ -126,7 +134,9 @@ def main() -> None:
         '`xvfb-run -a -s "-screen 0 1280x1024x24" python benchmarks/interactive_fps.py'
         f"{''.join(' ' + a for a in sys.argv[1:])}`: "
         f"the real window ({args.size}, Xvfb, Mesa llvmpipe, its own 30 fps timer) on the "
-        f"{base.name} scene, {args.seconds:g} s measured after {WARM_UP:g} s of warm-up, each "
+        f"{base.name} scene"
+        + (f" with wind {tuple(base.wind.velocity)} m/s" if base.wind else "")
+        + f", {args.seconds:g} s measured after {WARM_UP:g} s of warm-up, each "
         "integrator at the step the window gives it. fps is frames drawn over wall "
         "seconds; the worst interval is the longest wait between two frames; real time "
         "is simulated over wall seconds (1 = real time; below it the window runs in slow "

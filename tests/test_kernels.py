@@ -36,6 +36,29 @@ def test_forces_agree_to_round_off(n):
     np.testing.assert_allclose(f_compiled, f_reference, rtol=0, atol=1e-12 * scale)
 
 
+@pytest.mark.parametrize("lift", [0.0, 0.7])
+@pytest.mark.parametrize("shape", [(2, 2), (3, 5), (70, 66)])  # 70 rows: threaded
+def test_the_wind_agrees_to_round_off(shape, lift):
+    """The compiled wind against ``Wind.accumulate`` on a crumpled, moving
+    cloth: every triangle at its own angle to the air, some edge-on."""
+    ny, nx = shape
+    scene = pvcloth.Scene(
+        cloth=pvcloth.ClothSpec(resolution=(nx, ny), orientation="vertical"),
+        springs=pvcloth.SpringsSpec(None, None, None),
+        gravity=(0.0, 0.0, 0.0),
+        wind=WindSpec(velocity=(3.0, -1.0, 0.5), drag=1.1, lift=lift),
+    )
+    compiled, reference = twin(scene)
+    rng = np.random.default_rng(ny)
+    x = compiled.model.rest_positions + 0.05 * rng.standard_normal((nx * ny, 3))
+    v = rng.standard_normal((nx * ny, 3))
+    f_compiled = compiled.model.compute_forces(x, v)
+    f_reference = reference.model.compute_forces(x, v)
+    scale = np.abs(f_reference).max()
+    assert scale > 1e-6  # the wind is felt (gravity is off, there are no springs)
+    np.testing.assert_allclose(f_compiled, f_reference, rtol=0, atol=1e-12 * scale)
+
+
 @pytest.mark.parametrize("integrator", sorted(INTEGRATORS))
 def test_every_integrator_gives_the_same_run(integrator):
     dt = 1 / 120 if integrator in ("implicit_euler", "backward_euler") else None

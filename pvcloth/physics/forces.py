@@ -105,8 +105,9 @@ class Wind:
     the relative wind, of size ``1/2 rho C_l A |u|^2 sin(a) cos(a)`` at angle
     of attack ``a`` (a flat plate's lift, zero both edge-on and face-on). A
     third of the force goes to each corner. Triangle corners are strided views
-    of the grid, so no scatter. The term gives no Jacobian: implicit
-    integrators treat it explicitly.
+    of the grid, so no scatter. The compiled backend computes the same sums
+    triangle by triangle (:func:`pvcloth.physics.kernels.wind_forces`). The
+    term gives no Jacobian: implicit integrators treat it explicitly.
 
     Gusts scale the wind speed by ``1 + gust * g(t)``, where ``g`` takes
     independent uniform values in ``[-1, 1]`` every ``gust_period`` seconds

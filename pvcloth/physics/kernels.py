@@ -38,6 +38,7 @@ import types
 import numpy as np
 
 from pvcloth.errors import InputError
+from pvcloth.physics.forces import TINY_LENGTH
 from pvcloth.scene.validation import choice
 from pvcloth.signals import deferred
 
@@ -354,6 +355,68 @@ if numba is not None:
                 fastest = max(fastest, square)
         return fastest, checksum
 
+    @njit(fastmath=FASTMATH, cache=True, nogil=True)
+    def _wind_on_triangle(x3, v3, f3, j0, i0, j1, i1, j2, i2, air, drag, lift, density):
+        """One triangle's drag and lift, a third to each corner: the
+        arithmetic of :meth:`pvcloth.physics.forces.Wind.accumulate`, one
+        triangle at a time, in scalars (no arrays made per triangle)."""
+        ax, ay, az = x3[j0, i0, 0], x3[j0, i0, 1], x3[j0, i0, 2]
+        ux, uy, uz = x3[j1, i1, 0] - ax, x3[j1, i1, 1] - ay, x3[j1, i1, 2] - az
+        wx, wy, wz = x3[j2, i2, 0] - ax, x3[j2, i2, 1] - ay, x3[j2, i2, 2] - az
+        # the air's velocity relative to the triangle's mean velocity
+        rx = air[0] - (v3[j0, i0, 0] + v3[j1, i1, 0] + v3[j2, i2, 0]) / 3.0
+        ry = air[1] - (v3[j0, i0, 1] + v3[j1, i1, 1] + v3[j2, i2, 1]) / 3.0
+        rz = air[2] - (v3[j0, i0, 2] + v3[j1, i1, 2] + v3[j2, i2, 2]) / 3.0
+        nx_ = uy * wz - uz * wy
+        ny_ = uz * wx - ux * wz
+        nz_ = ux * wy - uy * wx
+        double_area = np.sqrt(nx_ * nx_ + ny_ * ny_ + nz_ * nz_)
+        inverse = 1.0 / max(double_area, TINY_LENGTH)
+        nx_ *= inverse
+        ny_ *= inverse
+        nz_ *= inverse
+        across = rx * nx_ + ry * ny_ + rz * nz_
+        speed = np.sqrt(rx * rx + ry * ry + rz * rz)
+        scale = 0.5 * density * (0.5 * double_area) * speed * across / 3.0
+        s0 = drag * scale * nx_
+        s1 = drag * scale * ny_
+        s2 = drag * scale * nz_
+        if lift != 0.0:
+            inverse_speed = 1.0 / max(speed, TINY_LENGTH)
+            along = across * inverse_speed
+            lifted = lift * scale
+            s0 += lifted * (nx_ - along * rx * inverse_speed)
+            s1 += lifted * (ny_ - along * ry * inverse_speed)
+            s2 += lifted * (nz_ - along * rz * inverse_speed)
+        f3[j0, i0, 0] += s0
+        f3[j0, i0, 1] += s1
+        f3[j0, i0, 2] += s2
+        f3[j1, i1, 0] += s0
+        f3[j1, i1, 1] += s1
+        f3[j1, i1, 2] += s2
+        f3[j2, i2, 0] += s0
+        f3[j2, i2, 1] += s1
+        f3[j2, i2, 2] += s2
+
+    def _wind_forces(x3, v3, f3, air, drag, lift, density):
+        """Add the wind on every cell's two triangles (``CELL_TRIANGLES``).
+        A row of cells writes to two rows of points, so threads take the
+        even rows of cells, then the odd ones: no two threads write one
+        point, and each point sums its triangles in the same order in the
+        serial and the threaded build."""
+        ny, nx, _ = x3.shape
+        for parity in range(2):
+            for half in prange((ny - parity) // 2):
+                j = 2 * half + parity
+                for i in range(nx - 1):
+                    # a b c, then a c d (a = (j, i), b = (j, i+1), c = (j+1, i+1))
+                    _wind_on_triangle(
+                        x3, v3, f3, j, i, j, i + 1, j + 1, i + 1, air, drag, lift, density
+                    )
+                    _wind_on_triangle(
+                        x3, v3, f3, j, i, j + 1, i + 1, j + 1, i, air, drag, lift, density
+                    )
+
     def _compile(function):
         """A serial and a threaded build of one kernel. Threads pay only on
         big grids: waking them costs microseconds, more when other thread
@@ -419,6 +482,7 @@ if numba is not None:
     _PRODUCT = _compile(_subtract_product)
     _BODY = _compile(_body_forces)
     _KICK = _compile(_kick_drift)
+    _WIND = _compile(_wind_forces)
 
 #: Grids with at least this many rows use the threaded kernels.
 THREADED_ROWS = 64
@@ -499,6 +563,23 @@ def body_forces(v, f, mass, gravity, air: float, shape) -> None:
     """Set ``f`` to gravity plus linear air damping (the other forces add on)."""
     s3 = shape + (3,)
     _pick(_BODY, shape[0])(v.reshape(s3), f.reshape(s3), mass.reshape(shape), gravity, air)
+
+
+def wind_forces(wind, x, v, f, shape) -> None:
+    """Add ``wind``'s force (a :class:`pvcloth.physics.forces.Wind`, at the
+    air velocity of its current time) at positions ``x`` (m) and velocities
+    ``v`` (m/s) to ``f`` (N), all ``(N, 3)``; compiled, the same sums as
+    ``wind.accumulate`` to round-off."""
+    s3 = shape + (3,)
+    _pick(_WIND, shape[0])(
+        x.reshape(s3),
+        v.reshape(s3),
+        f.reshape(s3),
+        wind.velocity,
+        float(wind.drag),
+        float(wind.lift),
+        float(wind.density),
+    )
 
 
 def kick_drift(x, v, f, inv_mass, dt: float, x_out, v_out, shape) -> tuple[float, bool]:

@@ -24,6 +24,7 @@ from pvcloth.physics.kernels import (
     spring_projection,
     spring_projection_numpy,
     subtract_product,
+    wind_forces,
 )
 from pvcloth.physics.obstacles import Contacts, build_obstacle
 from pvcloth.physics.self_collision import SelfCollision
@@ -127,14 +128,19 @@ class Model:
         velocities ``v`` (m/s) to ``out``; ``False`` (nothing added) without wind."""
         if self.wind is None:
             return False
-        self.wind.accumulate(x, v, out)
+        if self._plan is not None:
+            wind_forces(self.wind, x, v, out, self.shape)
+        else:
+            self.wind.accumulate(x, v, out)
         return True
 
     def add_other_forces(self, x: np.ndarray, v: np.ndarray, out: np.ndarray) -> None:
         """Add every force but the springs' (gravity, air damping, wind; N,
         shape (N, 3)) at ``x`` (m) and ``v`` (m/s) to ``out``."""
-        for term in self.other_forces:
-            term.accumulate(x, v, out)
+        for term in (self.gravity, self.air):
+            if term is not None:
+                term.accumulate(x, v, out)
+        self.add_wind(x, v, out)
 
     def spring_table(self) -> SpringTable:
         """Every spring of every family as one flat table (kept until the
@@ -163,7 +169,7 @@ class Model:
         if self._plan is not None:
             f = np.empty_like(x) if out is None else out
             # Gravity and air damping are written over f, the springs and the
-            # plate bending add on in compiled kernels, the wind in NumPy.
+            # plate bending and the wind add on, all in compiled kernels.
             gravity = self.gravity.acceleration if self.gravity is not None else _NO_GRAVITY
             air = self.air.rate if self.air is not None else 0.0
             body_forces(v, f, self.mass, gravity, air, self.shape)
@@ -171,8 +177,7 @@ class Model:
             if self.bending is not None:
                 if self._plan.empty:  # no spring pass to ride on: the whole product
                     subtract_product(self.bending.matrix, x, f, self.shape[0])
-            if self.wind is not None:
-                self.wind.accumulate(x, v, f)
+            self.add_wind(x, v, f)
             return f
         f = np.zeros_like(x) if out is None else out
         if out is not None:
