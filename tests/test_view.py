@@ -136,7 +136,7 @@ def test_a_point_shows_the_colour_of_its_field_value():
     assert stretch[inner].min() < 1.005 and stretch[inner].max() > 1.025  # across the map
     bars = list(plotter.scalar_bars.keys())
     plotter.close()
-    assert bars == ["stretch (length / rest length)"]
+    assert bars == ["stretch\n(length / rest length)"]  # the unit under the name
 
 
 def test_a_hanging_cloth_is_most_stretched_at_its_pins():
@@ -234,8 +234,10 @@ def test_a_new_obstacle_shape_draws_its_own_surface_or_says_it_has_none():
 
 
 def frame_by_frame(sim, frames, size, **view_options):
-    """The cloth's pixel box share and whether it left the frame, per frame,
-    and the camera positions (a movie's loop, measured)."""
+    """Per frame: the cloth's pixel box share, whether it left the frame,
+    the share it is seen over (:func:`silhouette_share`); and the camera
+    positions, its own and a camera refitted to every frame (a movie's
+    loop, measured)."""
     import pyvista as pv
 
     from pvcloth.visual.view import ClothView
@@ -259,6 +261,7 @@ def frame_by_frame(sim, frames, size, **view_options):
     # The same fit with no smoothing: what a camera refitted to every frame does.
     raw = FramingCamera(*VIEWS[sim.scene.camera.view], aspect=width / height, follow=1.0)
     shares, outside, cameras, raw_cameras = [], [], [], []
+    seen = []
     for _ in sim.frames(frames, 30.0):
         view.update()
         raw_cameras.append(raw.frame(sim.positions)[0])
@@ -268,8 +271,46 @@ def frame_by_frame(sim, frames, size, **view_options):
         shares.append(span.max() / min(width, height))
         outside.append(bool(((pixels < 0) | (pixels >= [height, width])).any()))
         cameras.append(np.array(plotter.camera.position))
+        seen.append(silhouette_share(plotter, sim.positions, sim.model.shape))
     plotter.close()
-    return np.array(shares), outside, np.array(cameras), np.array(raw_cameras)
+    return np.array(shares), outside, np.array(seen), np.array(cameras), np.array(raw_cameras)
+
+
+def project_all(plotter, points) -> np.ndarray:
+    """Pixel (column, row from the top) of world points, through the
+    camera's composite projection (its window centre included), in NumPy."""
+    renderer = plotter.renderer
+    width, height = plotter.window_size
+    matrix = renderer.GetActiveCamera().GetCompositeProjectionTransformMatrix(
+        renderer.GetTiledAspectRatio(), -1.0, 1.0
+    )
+    m = np.array([[matrix.GetElement(i, j) for j in range(4)] for i in range(4)])
+    clip = np.c_[points, np.ones(len(points))] @ m.T
+    ndc = clip[:, :2] / clip[:, 3:4]
+    return np.c_[(ndc[:, 0] + 1) / 2 * width, height - 1 - (ndc[:, 1] + 1) / 2 * height]
+
+
+def silhouette_share(plotter, points, shape) -> float:
+    """How much of the frame the cloth is seen over: its triangles filled
+    in at their projected pixels, then thinned by two pixels on every side
+    (a cloth seen edge-on, a line, vanishes), as the larger of the pixel
+    box's sides over the frame's smaller side."""
+    from PIL import Image, ImageDraw
+    from scipy.ndimage import binary_erosion
+
+    from pvcloth.physics.topology import triangles
+
+    width, height = plotter.window_size
+    pixels = project_all(plotter, points)
+    image = Image.new("1", (width, height), 0)
+    draw = ImageDraw.Draw(image)
+    for triangle in pixels[triangles(shape)]:
+        draw.polygon([tuple(p) for p in triangle], fill=1)
+    mask = binary_erosion(np.array(image), iterations=2)
+    rows, columns = np.nonzero(mask)
+    if rows.size == 0:
+        return 0.0
+    return max(np.ptp(rows), np.ptp(columns)) / min(width, height)
 
 
 @pytest.mark.parametrize(
@@ -282,13 +323,16 @@ def frame_by_frame(sim, frames, size, **view_options):
 )
 def test_the_camera_keeps_every_bundled_scene_framed(path):
     """The cloth's box spans at least half the frame's smaller side in every
-    frame and never leaves the frame, and the camera glides: it accelerates
+    frame from the first, and so does what is seen of it (its projected
+    triangles, thinned by two pixels: a cloth seen edge-on counts for
+    nothing), and it never leaves the frame; and the camera glides: it accelerates
     less than one refitted to every frame (measured as the RMS second
     difference of its position: 1.2 to 4.9 times less on these scenes) and
     never jumps by more than a seventh of its distance in a frame."""
     sim = Simulation.from_file(path)
-    shares, outside, cameras, raw = frame_by_frame(sim, 45, (320, 240))
+    shares, outside, seen, cameras, raw = frame_by_frame(sim, 45, (320, 240))
     assert shares.min() >= 0.5, f"smallest share {shares.min():.2f}"
+    assert seen.min() >= 0.5, f"seen over {seen.min():.2f} at frame {seen.argmin()}"
     assert not any(outside)
 
     def jerk(path):
@@ -297,6 +341,38 @@ def test_the_camera_keeps_every_bundled_scene_framed(path):
     assert jerk(cameras) < jerk(raw)
     distance = np.linalg.norm(cameras - sim.positions.mean(axis=0), axis=1).mean()
     assert np.linalg.norm(np.diff(cameras, axis=0), axis=1).max() < distance / 7
+
+
+@pytest.mark.parametrize("camera", ["scene", "fixed"])
+def test_the_scalar_bar_stands_clear_of_the_cloth_and_the_label(camera):
+    """Coloured by a field, the cloth is framed left of the strip on the
+    right where the scalar bar stands: in every frame of the flag coloured
+    by speed (a following camera, and a fixed one), every cloth point
+    projects left of the bar's box, and the label's box does not meet it."""
+    import pyvista as pv
+
+    from pvcloth.visual.view import ClothView
+
+    sim = Simulation.from_file(SCENES / "flag.toml")
+    plotter = pv.Plotter(off_screen=True, window_size=(320, 240))
+    view = ClothView(sim, plotter, color="speed", label=True, camera=camera)
+    plotter.show(auto_close=False)
+    renderer = plotter.renderer
+    (bar,) = plotter.scalar_bars.values()
+    height = plotter.window_size[1]
+    for _ in sim.frames(30, 30.0):
+        view.update()
+        plotter.render()
+        left, bottom = bar.GetPositionCoordinate().GetComputedDisplayValue(renderer)
+        right, top = bar.GetPosition2Coordinate().GetComputedDisplayValue(renderer)
+        assert 0 < left < right <= plotter.window_size[0] and 0 <= bottom < top <= height
+        columns = project_all(plotter, sim.positions)[:, 0]
+        assert columns.max() < left, f"cloth at column {columns.max():.0f}, bar from {left}"
+        box = [0.0] * 4  # the label: x from, x to, y from, y to (pixels from the bottom)
+        view.text.GetBoundingBox(renderer, box)
+        apart = box[1] < left or box[0] > right or box[3] < bottom or box[2] > top
+        assert apart, (box, (left, right, bottom, top))
+    plotter.close()
 
 
 def test_view_presets_and_an_explicit_camera():

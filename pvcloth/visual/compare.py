@@ -209,7 +209,7 @@ def compare(
 def _draw_panels(plotter, panels: list[Panel], reference, color):
     """One view per panel under a shared framing camera; returns the frame
     update and the progress note."""
-    from pvcloth.visual.camera import VIEWS, FramingCamera
+    from pvcloth.visual.camera import BAR_STRIP, VIEWS, FramingCamera
     from pvcloth.visual.colors import ColorRange
     from pvcloth.visual.view import ClothView
 
@@ -249,7 +249,13 @@ def _draw_panels(plotter, panels: list[Panel], reference, color):
     else:
         direction, up = VIEWS[scene.camera.view]
         panel_height = height * LABEL_ROWS / (LABEL_ROWS + 1)
-        framing = FramingCamera(direction, up, aspect=width / columns / panel_height)
+        framing = FramingCamera(
+            direction,
+            up,
+            aspect=width / columns / panel_height,
+            right_strip=BAR_STRIP if color else 0.0,  # each panel's scalar bar
+        )
+        plotter.camera.SetWindowCenter(*framing.window_center())
 
     def update():
         for panel, view, text in zip(panels, views, labels, strict=True):

@@ -20,7 +20,7 @@ import pyvista as pv
 from pvcloth.errors import InputError
 from pvcloth.physics import topology
 from pvcloth.physics.fields import point_fields
-from pvcloth.visual.camera import VIEWS, FramingCamera
+from pvcloth.visual.camera import BAR_STRIP, VIEW_ANGLE, VIEWS, FramingCamera
 from pvcloth.visual.colors import (
     BACK_COLOR,
     CLOTH_BACK_COLOR,
@@ -243,14 +243,18 @@ class ClothView:
             clim=self.clim,
             cmap=cmap or style.cmap,
             name="cloth",
+            # Upright in the strip on the right that the camera keeps the
+            # cloth out of (BAR_STRIP), above the label in the bottom corner.
             scalar_bar_args={
-                "title": style.title,
+                "title": style.title.replace(" (", "\n("),  # the unit under the name
                 "fmt": "%.4g",
-                "vertical": False,
-                "position_x": 0.52,
-                "position_y": 0.04,
-                "width": 0.45,
-                "height": 0.09,
+                "vertical": True,
+                # the box's left edge just right of the framed part; its
+                # centre, where the title is centred, 0.11 from the right edge
+                "position_x": 1.0 - BAR_STRIP + 0.005,
+                "position_y": 0.15,
+                "width": BAR_STRIP - 0.06,
+                "height": 0.72,
                 "n_labels": 3,
                 "title_font_size": text,
                 "label_font_size": text - 1,
@@ -273,12 +277,16 @@ class ClothView:
             self.plotter.renderer.ResetCameraClippingRange()
             return
         direction, up = VIEWS[spec.view]
+        strip = BAR_STRIP if self.field is not None else 0.0  # the scalar bar's place
+        camera.SetWindowCenter(strip, 0.0)
         if mode == "scene" and spec.follow:
             width, height = self.plotter.window_size
-            self.framing = FramingCamera(direction, up, aspect=width / height)
+            self.framing = FramingCamera(direction, up, aspect=width / height, right_strip=strip)
             return
         self.plotter.view_vector(direction, viewup=up)
+        camera.view_angle = VIEW_ANGLE  # a reset starts from VTK's angle again
         self.plotter.reset_camera(bounds=motion_bounds(self.sim))
+        camera.zoom(1.0 - strip)  # the same region in the narrower framed part
 
     def reset_camera(self) -> None:
         """Back to the starting camera (a following camera starts afresh)."""
