@@ -131,6 +131,7 @@ class Wind:
 
     def __post_init__(self):
         self.velocity = np.array(self.mean_velocity, dtype=float)
+        self._gusts: tuple = (None, 0.0, 0.0)  # (period, its two values): _gust_values
 
     @classmethod
     def from_spec(cls, spec, shape) -> Wind:
@@ -152,9 +153,20 @@ class Wind:
             return 1.0
         phase = t / self.gust_period
         k = math.floor(phase)
-        a, b = (np.random.default_rng([self.seed, k + n]).uniform(-1.0, 1.0) for n in (0, 1))
+        a, b = self._gust_values(k)
         blend = 0.5 - 0.5 * math.cos(math.pi * (phase - k))
         return 1.0 + self.gust * float(a + (b - a) * blend)
+
+    def _gust_values(self, k: int) -> tuple[float, float]:
+        """The uniform values at the start and end of gust period ``k``,
+        each from its own seeded generator; the last period's are kept (a
+        generator costs tens of microseconds, and steps ask every time)."""
+        if self._gusts[0] != k:
+            a, b = (
+                float(np.random.default_rng([self.seed, k + n]).uniform(-1.0, 1.0)) for n in (0, 1)
+            )
+            self._gusts = (k, a, b)
+        return self._gusts[1], self._gusts[2]
 
     def set_time(self, t: float) -> None:
         """Use the wind of time ``t`` until told otherwise."""
