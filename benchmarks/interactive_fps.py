@@ -45,9 +45,17 @@ WARM_UP = 1.0  # wall seconds before measuring (compilation, first chunks)
 DRAG_RADIUS, DRAG_PERIOD = 80.0, 2.0  # pixels, wall seconds per turn
 
 
-def measure(scene, integrator: str, seconds: float, drag: bool = False, size=(1024, 768)) -> dict:
+def measure(
+    scene,
+    integrator: str,
+    seconds: float,
+    drag: bool = False,
+    size=(1024, 768),
+    scene_step: bool = False,
+) -> dict:
     sim = pvcloth.Simulation(scene, integrator=integrator, stability="substep")
-    sim.set_step(None)  # what the window's "a" and "i" keys give
+    if not scene_step:
+        sim.set_step(None)  # what the window's "a" and "i" keys give
     app = ClothApp(sim, window_size=size)
     frames, chunks = [], []
     start = {}
@@ -114,6 +122,11 @@ def main() -> None:
     parser.add_argument(
         "--wind", action="store_true", help="wind from the start (the scene's, or the w key's)"
     )
+    parser.add_argument(
+        "--scene-step",
+        action="store_true",
+        help="the scene's own step, as pvcloth run opens it (default: the automatic step)",
+    )
     parser.add_argument("--size", default="1024x768", help="window WIDTHxHEIGHT")
     parser.add_argument("--out", type=Path, default=HERE / "results" / "interactive_fps.md")
     args = parser.parse_args()
@@ -124,7 +137,8 @@ def main() -> None:
     rows = []
     for n in args.sizes:
         for integrator in args.integrators:
-            rows.append(measure(base.with_resolution(n), integrator, args.seconds, args.drag, size))
+            scene = base.with_resolution(n)
+            rows.append(measure(scene, integrator, args.seconds, args.drag, size, args.scene_step))
             print(rows[-1], flush=True)
     lines = [
         "# The interactive window, by the wall clock",
@@ -136,8 +150,13 @@ def main() -> None:
         f"the real window ({args.size}, Xvfb, Mesa llvmpipe, its own 30 fps timer) on the "
         f"{base.name} scene"
         + (f" with wind {tuple(base.wind.velocity)} m/s" if base.wind else "")
-        + f", {args.seconds:g} s measured after {WARM_UP:g} s of warm-up, each "
-        "integrator at the step the window gives it. fps is frames drawn over wall "
+        + f", {args.seconds:g} s measured after {WARM_UP:g} s of warm-up, "
+        + (
+            "each integrator at the scene's own step (as `pvcloth run` opens it). "
+            if args.scene_step
+            else "each integrator at the step the window's a key gives it. "
+        )
+        + "fps is frames drawn over wall "
         "seconds; the worst interval is the longest wait between two frames; real time "
         "is simulated over wall seconds (1 = real time; below it the window runs in slow "
         "motion and says so). Physics runs on its own thread: a long chunk slows the "

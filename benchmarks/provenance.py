@@ -29,7 +29,10 @@ def _commit() -> str:
     try:
         top = _git("rev-parse", "--show-toplevel")
         commit = _git("rev-parse", "--short", "HEAD")
-        changed = _git("status", "--porcelain", "--untracked-files=no")
+        # the results files a run rewrites are not a change of the code measured
+        changed = _git(
+            "status", "--porcelain", "--untracked-files=no", "--", ".", ":!benchmarks/results"
+        )
     except (OSError, subprocess.SubprocessError):
         return "commit unknown (not a git checkout)"
     # A copy of the repository inside some other checkout is not a checkout of pvcloth.
