@@ -271,20 +271,21 @@ class ClothView:
             return
         spec = self.sim.scene.camera
         camera = self.plotter.camera
-        if spec.explicit:
+        strip = BAR_STRIP if self.field is not None else 0.0  # the scalar bar's place
+        camera.SetWindowCenter(strip, 0.0)
+        camera.view_angle = VIEW_ANGLE  # a reset starts from VTK's angle again
+        if spec.explicit:  # what it frames is squeezed into the part left of the bar
             camera.position, camera.focal_point = spec.position, spec.focal_point
             camera.up = spec.up
+            camera.zoom(1.0 - strip)
             self.plotter.renderer.ResetCameraClippingRange()
             return
         direction, up = VIEWS[spec.view]
-        strip = BAR_STRIP if self.field is not None else 0.0  # the scalar bar's place
-        camera.SetWindowCenter(strip, 0.0)
         if mode == "scene" and spec.follow:
             width, height = self.plotter.window_size
             self.framing = FramingCamera(direction, up, aspect=width / height, right_strip=strip)
             return
         self.plotter.view_vector(direction, viewup=up)
-        camera.view_angle = VIEW_ANGLE  # a reset starts from VTK's angle again
         self.plotter.reset_camera(bounds=motion_bounds(self.sim))
         camera.zoom(1.0 - strip)  # the same region in the narrower framed part
 
