@@ -173,9 +173,7 @@ def write(results, checks, rounds, have_taichi, out: Path, arguments: list[str])
         "pvcloth rows time `Simulation.step()`: float64, compiled kernels (numba, "
         f"{numba.get_num_threads()} threads from 64 rows up on numba's "
         f"`{threading_layer()}` threading layer) unless marked NumPy path. "
-        "Ratios below 1 mean pvcloth is faster. Floors at 256x256 on this CPU "
-        "(`../shared/MEASUREMENTS.md`): spring arithmetic 0.30 ms on two threads, memory "
-        "traffic of this layout 0.56-1.0 ms.",
+        "Ratios below 1 mean pvcloth is faster.",
         "",
         "| points per side | solver | ms per step | vs Taichi float32 | vs Taichi float64 |",
         "|---|---|---|---|---|",

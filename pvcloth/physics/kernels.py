@@ -39,6 +39,7 @@ import numpy as np
 
 from pvcloth.errors import InputError
 from pvcloth.physics.forces import TINY_LENGTH
+from pvcloth.physics.topology import CELL_TRIANGLES
 from pvcloth.scene.validation import choice
 from pvcloth.signals import deferred
 
@@ -409,13 +410,23 @@ if numba is not None:
             for half in prange((ny - parity) // 2):
                 j = 2 * half + parity
                 for i in range(nx - 1):
-                    # a b c, then a c d (a = (j, i), b = (j, i+1), c = (j+1, i+1))
-                    _wind_on_triangle(
-                        x3, v3, f3, j, i, j, i + 1, j + 1, i + 1, air, drag, lift, density
-                    )
-                    _wind_on_triangle(
-                        x3, v3, f3, j, i, j + 1, i + 1, j + 1, i, air, drag, lift, density
-                    )
+                    for t in range(2):
+                        (j0, i0), (j1, i1), (j2, i2) = CELL_TRIANGLES[t]
+                        _wind_on_triangle(
+                            x3,
+                            v3,
+                            f3,
+                            j + j0,
+                            i + i0,
+                            j + j1,
+                            i + i1,
+                            j + j2,
+                            i + i2,
+                            air,
+                            drag,
+                            lift,
+                            density,
+                        )
 
     def _compile(function):
         """A serial and a threaded build of one kernel. Threads pay only on
