@@ -181,6 +181,19 @@ class SpringPlan:
 if numba is not None:
 
     @njit(fastmath=FASTMATH, cache=True, nogil=True)
+    def _row_product(indptr, indices, data, x, r):
+        """Row ``r`` of a CSR matrix times ``x`` ``(N, 3)``: the three sums."""
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        for k in range(indptr[r], indptr[r + 1]):
+            c, a = indices[k], data[k]
+            s0 += a * x[c, 0]
+            s1 += a * x[c, 1]
+            s2 += a * x[c, 2]
+        return s0, s1, s2
+
+    @njit(fastmath=FASTMATH, cache=True, nogil=True)
     def _spring_block(
         x3, v3, f3, stiffness, damping, rest, geometry, extent, plate, lo, hi, scratch, tmp
     ):  # plate: (coefficients, indptr, indices, data), see SpringPlan.set_plate
@@ -272,15 +285,7 @@ if numba is not None:
                 for i in range(nx):
                     if not edge_row and 2 <= i < nx - 2:
                         continue
-                    p = i + nx * j
-                    s0 = 0.0
-                    s1 = 0.0
-                    s2 = 0.0
-                    for k in range(indptr[p], indptr[p + 1]):
-                        q, a = indices[k], data[k]
-                        s0 += a * flat[q, 0]
-                        s1 += a * flat[q, 1]
-                        s2 += a * flat[q, 2]
+                    s0, s1, s2 = _row_product(indptr, indices, data, flat, i + nx * j)
                     f[0, j - r0, i] -= s0
                     f[1, j - r0, i] -= s1
                     f[2, j - r0, i] -= s2
@@ -477,14 +482,7 @@ if numba is not None:
         row's three sums written once (rows are independent: threads need
         no care)."""
         for r in prange(indptr.size - 1):
-            s0 = 0.0
-            s1 = 0.0
-            s2 = 0.0
-            for k in range(indptr[r], indptr[r + 1]):
-                c, a = indices[k], data[k]
-                s0 += a * x[c, 0]
-                s1 += a * x[c, 1]
-                s2 += a * x[c, 2]
+            s0, s1, s2 = _row_product(indptr, indices, data, x, r)
             f[r, 0] -= s0
             f[r, 1] -= s1
             f[r, 2] -= s2
