@@ -110,8 +110,19 @@ class Model:
         return [term for term in (self.gravity, self.air, self.wind) if term is not None]
 
     # What the implicit integrators ask of the terms besides the springs
-    # (they hold springs in their matrices and the rest as loads): three
-    # questions, so that no integrator reads a term's fields.
+    # (they hold springs and plate bending in their matrices and the rest as
+    # loads): these questions, so that no integrator reads a term's fields.
+
+    @property
+    def bending_matrix(self) -> sp.csr_matrix | None:
+        """Plate bending's constant ``Q`` (N/m, ``(N, N)``): energy
+        ``x_c^T Q x_c / 2`` per coordinate; ``None`` without plate bending."""
+        return self.bending.matrix if self.bending is not None else None
+
+    def bending_hessian(self) -> sp.csr_matrix | None:
+        """``Q`` for every coordinate, ``(3N, 3N)`` in the point-major order
+        of the other Jacobians (made once); ``None`` without plate bending."""
+        return self.bending.hessian() if self.bending is not None else None
 
     @property
     def air_rate(self) -> float:

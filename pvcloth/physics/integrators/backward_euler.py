@@ -189,7 +189,7 @@ class _StepPotential:
             table.rest,
         )  # (S,) m
         # Plate bending: energy x^T Q x / 2 per coordinate (or None).
-        self.bending = model.bending.matrix if model.bending is not None else None
+        self.bending = model.bending_matrix
         self.gravity = np.zeros_like(x)  # (N, 3) N
         model.add_gravity(x, v, self.gravity)
         self.constant = self.gravity.copy()  # gravity, plus the wind at the anchor
@@ -255,7 +255,7 @@ class _StepPotential:
         blocks = stiffness_blocks(t[self.b] - t[self.a], self.rest, self.stiffness, exact)
         dfdx = self.pattern.assemble(blocks)
         if self.bending is not None:
-            dfdx = dfdx - self.model.bending.hessian()
+            dfdx = dfdx - self.model.bending_hessian()
         free = np.repeat(~pinned, 3)
         diagonal = np.repeat(mass * (1.0 + self.rate * dt), 3)
         return (sp.diags(diagonal) - dt * dt * dfdx).tocsr()[free][:, free]

@@ -182,8 +182,8 @@ def _factorise(model: Model, control: Control, dt: float) -> _Factor:
         shape=(s.size, n),
     )
     laplacian = (incidence.T @ sp.diags(springs.stiffness) @ incidence).tocsr()  # G^T K G
-    if model.bending is not None:  # its energy x^T Q x / 2: the solve takes it whole
-        laplacian = laplacian + model.bending.matrix
+    if model.bending_matrix is not None:  # energy x^T Q x / 2: the solve takes it whole
+        laplacian = laplacian + model.bending_matrix
     system = (sp.diags(model.mass) + dt * dt * laplacian).tocsr()
     # Pinned points stay in the system as identity rows and columns, so
     # that every array has all N points and no iteration gathers or
