@@ -603,7 +603,7 @@ def test_the_overlay_says_an_adaptive_run_s_mean_step():
     assert (
         ClothView(fixed, plotter, camera="none", label=True)
         .text.GetInput()
-        .endswith(f"dt = {fixed.dt:.3g} s")
+        .endswith(f"dt = {fixed.dt:.3g} s (as given)")
     )
     plotter.close()
 

@@ -1,8 +1,9 @@
 """What happens to a step after the integrator made it: an ordered list of
 operators, built once from what the scene asks for.
 
-The integrator moves every point as if nothing were in the way. Then, in
-this order:
+Before the integrator, :class:`PinVelocities` (always) gives the pinned
+points the velocity that lands them on their targets. The integrator moves
+every point as if nothing were in the way. Then, in this order:
 
 1. :class:`ObstacleContacts` (only with obstacles): swept collision with
    each obstacle, points pushed out with friction;
@@ -71,6 +72,40 @@ class Operator(Protocol):
     name: str
 
     def __call__(self, step: Step) -> None: ...
+
+
+class PinVelocities:
+    """The state a step starts from, its pinned points at the velocity that
+    lands them on their targets in ``dt``.
+
+    Pinned points have zero inverse mass, so integrators move them at their
+    velocity. The current state is returned as it is when it holds that
+    velocity already (pins standing still: the last step landed them at
+    rest), else a state sharing its positions and holding a copy of its
+    velocities with the pinned rows changed: the current state is never
+    written.
+
+    Parameters
+    ----------
+    n : int
+        Number of points.
+    """
+
+    name = "pin velocities"
+
+    def __init__(self, n: int):
+        self._velocities = np.empty((n, 3))
+
+    def __call__(
+        self, state: State, pinned: np.ndarray, pin_positions: np.ndarray, dt: float
+    ) -> tuple[State, np.ndarray]:
+        """``(state to step from, pin velocity (m/s) of shape (P, 3))``."""
+        pin_velocity = (pin_positions - state.x[pinned]) / dt
+        if np.array_equal(state.v[pinned], pin_velocity):
+            return state, pin_velocity
+        np.copyto(self._velocities, state.v)
+        self._velocities[pinned] = pin_velocity
+        return State(state.x, self._velocities, state.t), pin_velocity
 
 
 class ObstacleContacts:

@@ -26,7 +26,7 @@ from pvcloth.physics.live_edits import LiveEdits
 from pvcloth.physics.memory import check_memory
 from pvcloth.physics.model import build_model
 from pvcloth.physics.pins import Pins
-from pvcloth.physics.pipeline import Guard, Step, build_pipeline
+from pvcloth.physics.pipeline import Guard, PinVelocities, Step, build_pipeline
 from pvcloth.physics.state import Control, Snapshot, State
 from pvcloth.scene.files import load_scene
 from pvcloth.scene.parts import AUTO, MAX_LENGTH
@@ -199,9 +199,7 @@ class Simulation(Clocks, LiveEdits, Pins):
         self._state = State(x, np.zeros_like(x), 0.0)
         self._public: State | None = None  # read-only views of _state, made when asked
         self._spare = State(np.empty_like(x), np.empty_like(x))
-        # A step's velocities when moving pins need other ones than the
-        # state's (see _substep): never the current state's own rows.
-        self._pin_velocities = np.empty_like(x)
+        self.pin_velocities = PinVelocities(len(x))
         self.control = Control.from_model(self.model)
         #: Steps taken since the start.
         self.steps = 0
@@ -481,17 +479,7 @@ class Simulation(Clocks, LiveEdits, Pins):
         into the spare one, which becomes current; with a controller,
         ``False`` when its error estimate rejected it (nothing changed)."""
         dt = self.dt if dt is None else dt
-        state = self._state
-        # Pinned points have zero inverse mass, so integrators move them at
-        # their velocity: the one that lands them on their target. The step
-        # starts from a state whose pinned rows carry it; the current state
-        # holds it already while pins stand still (the last step landed them
-        # at rest), else a copy of its velocities does.
-        pin_velocity = (pin_positions - state.x[pinned]) / dt
-        if not np.array_equal(state.v[pinned], pin_velocity):
-            np.copyto(self._pin_velocities, state.v)
-            self._pin_velocities[pinned] = pin_velocity
-            state = State(state.x, self._pin_velocities, state.t)
+        state, pin_velocity = self.pin_velocities(self._state, pinned, pin_positions, dt)
         model = self.model
         model.set_time(state.t)
         spare = self._spare

@@ -44,6 +44,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from pvcloth.errors import SceneError, SweepError
+from pvcloth.io.files import atomic_write
 from pvcloth.physics.reference import reference_run, reference_step, rms_distance
 from pvcloth.scene.overrides import parse_value
 from pvcloth.scene.spec import Scene
@@ -219,7 +220,12 @@ def read_rows(path: Path) -> list[dict]:
 
 
 class RowWriter:
-    """Appends one CSV row per finished unit, flushed at once."""
+    """Appends one CSV row per finished unit, flushed at once.
+
+    The one output not staged whole (:mod:`pvcloth.io.files`): a sweep
+    resumes from the rows already there, so each finished run must reach
+    the file as it ends. A row cut short by a kill is dropped on reading
+    and on reopening."""
 
     def __init__(self, path: Path):
         if path.exists():
@@ -437,7 +443,7 @@ def plot(rows: list[dict], sets: dict[str, list], path: Path, axes: list[str] | 
     cost.legend(fontsize=7)
     cost.grid(True, which="both", alpha=0.2)
     fig.tight_layout()
-    fig.savefig(path)
+    atomic_write(path, fig.savefig)
 
 
 def _stability_panel(panel, rows, sets, axes) -> None:

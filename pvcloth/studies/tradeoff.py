@@ -39,6 +39,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from pvcloth.errors import DivergenceError
+from pvcloth.io.files import atomic_write
 from pvcloth.physics.integrators import INTEGRATORS
 from pvcloth.physics.reference import (
     REFERENCE_INTEGRATOR,
@@ -222,11 +223,17 @@ def pareto_front(runs: list[Run]) -> list[Run]:
 
 
 def write_csv(runs: list[Run], path: Path) -> None:
-    with open(path, "w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(asdict(runs[0])))
-        writer.writeheader()
-        for run in runs:
-            writer.writerow(asdict(run))
+    """One row per run, written whole (:func:`~pvcloth.io.files.atomic_write`):
+    an interrupted study leaves the previous table."""
+
+    def write(temporary: str) -> None:
+        with open(temporary, "w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=list(asdict(runs[0])))
+            writer.writeheader()
+            for run in runs:
+                writer.writerow(asdict(run))
+
+    atomic_write(path, write)
 
 
 #: One colour and one marker per integrator, in the order of their names:
@@ -252,8 +259,9 @@ def step_label(dt: float) -> str:
 
 
 def plot(runs: list[Run], path: Path, title: str) -> None:
-    """Save :func:`draw`'s figure to ``path`` (PNG, SVG, PDF: by its suffix)."""
-    draw(runs, title).savefig(path)
+    """Save :func:`draw`'s figure to ``path`` (PNG, SVG, PDF: by its suffix),
+    whole or not at all (:func:`~pvcloth.io.files.atomic_write`)."""
+    atomic_write(path, draw(runs, title).savefig)
 
 
 def draw(runs: list[Run], title: str):

@@ -20,6 +20,7 @@ import pyvista as pv
 from pvcloth.errors import InputError
 from pvcloth.physics import topology
 from pvcloth.physics.fields import point_fields
+from pvcloth.physics.step_policy import STEP_SOURCES
 from pvcloth.visual.camera import BAR_STRIP, VIEW_ANGLE, VIEWS, FramingCamera
 from pvcloth.visual.colors import (
     BACK_COLOR,
@@ -336,13 +337,15 @@ class ClothView:
             self.text.SetInput(f"t = {frame.t:5.2f} s   {frame.integrator}, {step}")
 
     def _step_text(self, frame: Snapshot) -> str:
-        """The step for the overlay: ``dt``, or for an adaptive run the mean
-        step since the last frame and how many it took (its last step alone
-        is often one shortened to land on the frame)."""
+        """The step for the overlay and where it came from, in the word the
+        summary and the window's status use (:data:`STEP_SOURCES`); for an
+        adaptive run, the mean step since the last frame and how many it
+        took (its last step alone is often one shortened to land on the frame)."""
+        origin = STEP_SOURCES[frame.dt_source]
         if not frame.adaptive:
-            return f"dt = {frame.dt:.3g} s"
+            return f"dt = {frame.dt:.3g} s ({origin})"
         then, self._clock = self._clock, (frame.t, frame.steps)
         if then is None or frame.steps <= then[1]:
-            return f"dt = {frame.dt:.3g} s (adaptive)"
+            return f"dt = {frame.dt:.3g} s ({origin})"
         steps = frame.steps - then[1]
-        return f"dt = {(frame.t - then[0]) / steps:.3g} s (adaptive, mean of {steps})"
+        return f"dt = {(frame.t - then[0]) / steps:.3g} s ({origin}, mean of {steps})"
