@@ -147,8 +147,11 @@ def pytest_sessionstart(session):
 def pytest_terminal_summary(terminalreporter, exitstatus, config):
     """After ``python -m pytest -m exhaustive`` (and only then), record the
     run in ``benchmarks/results/exhaustive.md``: commit, machine, outcome
-    counts, wall time and the slowest tests."""
+    counts, wall time and the slowest tests. A run that only collects
+    (``--collect-only``) ran nothing and leaves the record alone."""
     if (config.option.markexpr or "").strip() != "exhaustive" or hasattr(config, "workerinput"):
+        return
+    if config.option.collectonly:
         return
     import platform
     import subprocess
