@@ -41,7 +41,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from provenance import cpu_name
+from provenance import cpu_name, provenance
 
 HERE = Path(__file__).parent
 ROOT = HERE.parent
@@ -220,6 +220,8 @@ def main() -> None:
     text = "\n".join(
         [
             f"# Before and after: {labels[0]} against {labels[1]}",
+            "",
+            provenance(),
             "",
             f"`python benchmarks/before_after.py {labels[0]}"
             + (f" {labels[1]}" if args.after else "")
