@@ -24,8 +24,8 @@ Run:  python benchmarks/implicit_crossover.py [--sizes 64] [--factors 0.25 1 4 1
 from __future__ import annotations
 
 import argparse
-import sys
 import math
+import sys
 import time
 from pathlib import Path
 
@@ -124,7 +124,8 @@ def main() -> None:
         "",
         provenance(),
         "",
-        f"`{' '.join(['python benchmarks/implicit_crossover.py', *sys.argv[1:]])}`: hanging scene, all "
+        f"`{' '.join(['python benchmarks/implicit_crossover.py', *sys.argv[1:]])}`: "
+        "hanging scene, all "
         "spring stiffnesses and dampings scaled together; explicit methods at 0.9 of their "
         f"stable step, implicit Euler at 1/60 s; {DURATION:g} s simulated after 0.05 s. Rate = "
         "simulated seconds per wall second (higher is faster). Errors: RMS point distance from "

@@ -85,32 +85,21 @@ html_show_sourcelink = False
 
 # -- the performance pages: every benchmarks/results table, as it is -----------
 # Each results file becomes a page (generated here, not committed), so the
-# numbers the guide quotes link to the table and the command that made them.
-# A table that does not say which commit and machine it was measured on says
-# so in a note above it.
+# numbers the guide quotes link to the table and the command that made them
+# (each names its commit and machine: tests/test_benchmarks.py checks).
 RESULTS = HERE.parent / "benchmarks" / "results"
 GENERATED = HERE / "performance" / "results"
 
 
 def _write_results_pages() -> None:
-    import re
     import shutil
 
     if GENERATED.exists():
         shutil.rmtree(GENERATED)
     shutil.copytree(RESULTS, GENERATED, ignore=shutil.ignore_patterns("*.md"))
     for table in sorted(RESULTS.glob("*.md")):
-        text = table.read_text(encoding="utf-8")
-        stamped = re.search(r"\b[0-9a-f]{7,40}\b", text) and re.search(r"\bcores?\b", text)
-        note = (
-            ""
-            if stamped
-            else "```{note}\nThis table does not state the commit and the machine it was "
-            "measured on: it is older than that rule, and is to be measured again with "
-            f"the command it gives (`benchmarks/{table.stem.split('_')[0]}*.py`).\n```\n\n"
-        )
-        title, _, rest = text.partition("\n")
-        page = f"{title}\n\n{note}Source: `benchmarks/results/{table.name}`.\n{rest}"
+        title, _, rest = table.read_text(encoding="utf-8").partition("\n")
+        page = f"{title}\n\nSource: `benchmarks/results/{table.name}`.\n{rest}"
         (GENERATED / table.name).write_text(page, encoding="utf-8")
 
 

@@ -71,6 +71,25 @@ def test_every_benchmark_script_is_listed_here():
     assert scripts - helpers == set(RUNS)
 
 
+def test_every_results_table_says_which_commit_and_machine_measured_it():
+    """A number is read with the code and the machine that made it: every
+    table names the commit it was measured on, the CPU and its cores, and
+    the command that made it (the performance pages show each as it is)."""
+    import re
+
+    unstamped = []
+    for table in sorted((ROOT / "benchmarks" / "results").glob("*.md")):
+        head = "\n".join(table.read_text(encoding="utf-8").splitlines()[:8])
+        stamped = (
+            re.search(r"\bcommit [0-9a-f]{7,40}\b", head)
+            and re.search(r"\b\d+ cores\b", head)
+            and re.search(r"`(xvfb-run .*)?python ", head)
+        )
+        if not stamped:
+            unstamped.append(table.name)
+    assert not unstamped, f"measure again (their commands head them): {unstamped}"
+
+
 @pytest.fixture(scope="module")
 def copy(tmp_path_factory):
     """The repository's files (no venv, no git) in a scratch folder."""
