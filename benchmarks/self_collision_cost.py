@@ -129,10 +129,10 @@ def main() -> None:
         "",
         provenance(),
         "",
-        f"`python benchmarks/self_collision_cost.py --sizes {' '.join(map(str, args.sizes))} "
-        f"--cases {' '.join(args.cases)} --steps {args.steps} --settle {args.settle:g} "
-        f"--windy {args.windy:g}`; median ms "
-        "per 1/60 s frame of `fast_mass_spring` (one 1/60 s step off; on, the steps the "
+        f"`{' '.join(['python benchmarks/self_collision_cost.py', *sys.argv[1:]])}` "
+        f"(sizes {' '.join(map(str, args.sizes))}, cases {' '.join(args.cases)}, "
+        f"{args.steps} frames timed, fold settled {args.settle:g} s, windy {args.windy:g} s); "
+        "median ms per 1/60 s frame of `fast_mass_spring` (one 1/60 s step off; on, the steps the "
         "self-collision step bound asks for), on and off measured side by side from the "
         f"same state, in turns of {BLOCK} frames each.",
         "",
