@@ -35,8 +35,11 @@ def measure(n: int, integrator: str, reuse: bool, steps: int) -> dict:
     # The automatic step: the scene's own is unstable on finer grids.
     scene = scene.with_resolution(n).with_overrides({"solver.dt": None})
     sim = pvcloth.Simulation(scene, integrator=integrator)
-    if not reuse:
-        sim._take_spare = lambda: None  # every step takes new memory
+    if not reuse:  # every step takes new memory: the spare state is not offered
+        step = sim.integrator.step
+        sim.integrator.step = lambda model, state, control, dt, out=None: step(
+            model, state, control, dt
+        )
     for _ in range(20):  # compile, warm caches
         sim.step()
     faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
@@ -52,6 +55,12 @@ def measure(n: int, integrator: str, reuse: bool, steps: int) -> dict:
     sim.step()
     peak = tracemalloc.get_traced_memory()[1] - held
     tracemalloc.stop()
+    new_state = 2 * sim.positions.nbytes  # positions and velocities
+    if not reuse and peak < new_state:
+        raise RuntimeError(
+            f"the new-states arm allocated {peak} B in a step, less than a state "
+            f"({new_state} B): its hook no longer reaches the step"
+        )
     return {
         "faults": faults / steps,
         "peak_bytes": peak,

@@ -35,6 +35,7 @@ RUNS = {
     "environment_cost.py": ([], "environment_cost.md"),
     "fabric_speed.py": ([], "fabric_speed.md"),
     "finite_check.py": ([], "finite_check.md"),
+    "fresh_clone.py": (["--quick"], "fresh_clone.md"),
     "fuzz.py": (["--examples", "3"], "fuzz.md"),
     "implicit_crossover.py": (
         ["--sizes", "8", "--factors", "1", "--output", "results/implicit_crossover.md"],

@@ -101,3 +101,14 @@ def test_the_site_builds_with_warnings_as_errors_and_its_pages_show(tmp_path):
         # and a spread of brightness well above a blank page's zero.
         assert image[..., :3].std() > 10, name
         assert len(np.unique(image[..., :3].reshape(-1, 3), axis=0)) > 50, name
+
+
+def test_the_api_reference_lists_everything_pvcloth_exports():
+    import re
+
+    import pvcloth
+
+    page = (ROOT / "docs" / "api.rst").read_text(encoding="utf-8")
+    listed = set(re.findall(r"^   (\w+)$", page, re.MULTILINE))
+    listed |= set(re.findall(r"``pvcloth\.(\w+)``", page))
+    assert set(pvcloth.__all__) - listed == set()

@@ -51,6 +51,7 @@ for name in sorted(INTEGRATORS):
     sim = Simulation(scene, integrator=name)
     sim.pin(3)
     sim.advance(0.02)
+print(json.dumps(sorted(m for m in sys.modules if m.startswith("pvcloth."))))
 print(json.dumps(sorted(m.split(".")[0] for m in sys.modules)))
 """
     done = subprocess.run(
@@ -58,6 +59,9 @@ print(json.dumps(sorted(m.split(".")[0] for m in sys.modules)))
     )
     loaded = set(json.loads(done.stdout.splitlines()[-1]))
     assert not loaded & set(OUTSIDE), f"physics loaded {sorted(loaded & set(OUTSIDE))}"
+    ours = json.loads(done.stdout.splitlines()[-2])
+    above = [m for m in ours if m.split(".")[1] in ("visual", "io", "studies", "cli")]
+    assert not above, f"physics loaded the layers above it: {above}"
 
 
 def _imports(path: Path, annotations: bool = True, names: bool = False) -> set[str]:

@@ -69,8 +69,7 @@ def save_checkpoint(sim: Simulation, path: str | os.PathLike) -> Path:
         x=sim.state.x,
         v=sim.state.v,
         t=np.array(sim.state.t),
-        steps=np.array(sim.steps),
-        owed=np.array(sim.owed),
+        **sim.clock_state(),  # steps, owed
         **sim.control.get_state(),  # pinned, targets
         **extra,
     )

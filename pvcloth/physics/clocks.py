@@ -11,6 +11,8 @@ import contextlib
 import math
 from collections.abc import Iterator
 
+import numpy as np
+
 from pvcloth.errors import DivergenceError, InputError, SceneError
 from pvcloth.physics.adaptive import steady_step
 from pvcloth.physics.blas import one_blas_thread
@@ -24,6 +26,12 @@ class Clocks:
     """The time-stepping methods of :class:`~pvcloth.physics.simulation.Simulation`
     (they read its ``dt``, ``controller``, ``owed``, ``state`` and ``control``
     and call its ``_substep`` and ``_state_changed``)."""
+
+    def clock_state(self) -> dict[str, np.ndarray]:
+        """What the clock carries from call to call, as a checkpoint saves
+        it: the steps taken and the time owed to the next call (s, less
+        than one step)."""
+        return {"steps": np.array(self.steps), "owed": np.array(self.owed)}
 
     def advance(self, seconds: float, on_step=None) -> None:
         """Simulate ``seconds`` more, in fixed substeps of ``dt``.

@@ -116,6 +116,7 @@ from pvcloth.physics import topology
 from pvcloth.physics.self_collision.continuous import approaches, impulses
 from pvcloth.physics.self_collision.geometry import point_triangle, segment_segment
 from pvcloth.physics.self_collision.pairs import (
+    PairList,
     box_pairs,
     contains,
     inside,
@@ -184,17 +185,12 @@ class SelfCollision:
         ny, nx = self.shape
         self._cells = np.stack(np.divmod(np.arange(nx * ny), nx)[::-1], 1)  # (N, 2): column, row
         self.report = Report()
-        self._anchor: np.ndarray | None = None  # (N, 3) m: where the list was built
-        self._low = np.empty((0, 3))  # (N, 3) m: the box each point must stay in
-        self._high = np.empty((0, 3))
-        self._rows = np.empty((0, 3), np.int64)  # the pair list: (kind, first, second)
         self._wide = np.empty((0, 3), np.int64)  # the wider list it is taken from
         self._wide_lo = np.empty((0, 3))  # (N, 3) m: the wider list's boxes
         self._wide_hi = np.empty((0, 3))
         self._served = 0  # calls of _build the wider list has served
         self._reuse = 1.0  # how often wider lists served more than one call, lately
         self._rebuilds = 0
-        self._gaps = np.empty(0)  # (P,) m: each listed pair's distance at the anchor
         self._capacity = [1 << 16, 1 << 16]  # room for VF and for EE pairs
 
     def longest_step(self, gravity: float) -> float:
@@ -233,22 +229,22 @@ class SelfCollision:
         # proven apart), but which pairs the zones meet, and so the step's
         # result, would then depend on the run's history: a resumed run
         # would not repeat a continuous one bit for bit. So each step lists.
-        self._build(x0, x1, reach)
-        rows = self._rows
-        near = screen(rows, self._gaps, self._anchor, x0, x1, self.triangles, self.edges, reach, d)
+        pairs = self._build(x0, x1, reach)
+        rows = pairs.rows
+        near = screen(rows, pairs.gaps, pairs.anchor, x0, x1, self.triangles, self.edges, reach, d)
         start = x1.copy()
         floor = np.zeros_like(x1)  # per point: its obstacle's outward normal, or zero
         for contact in resting:
             floor[contact.index] = contact.normal
         contacts = respond(
-            rows, near, self._gaps, self._cells, self.triangles, self.edges, x0, x1, v1, start,
+            rows, near, pairs.gaps, self._cells, self.triangles, self.edges, x0, x1, v1, start,
             inv_mass, floor, d, self.friction, dt, reach, SWEEPS,
         )  # fmt: skip
         fresh = np.ones(len(x0), np.bool_)
         clear = False
         for sweep in range(SWEEPS):
             count, fresh, found = impulses(
-                rows, near, self._gaps, self.triangles, self.edges, x0, x1, v1, inv_mass,
+                rows, near, pairs.gaps, self.triangles, self.edges, x0, x1, v1, inv_mass,
                 floor, MARGIN * d, fresh,
             )  # fmt: skip
             # Nothing in the first sweep approaches: the zones' first pass
@@ -259,19 +255,19 @@ class SelfCollision:
             # The impulses may move points by more than the response's reach:
             # list again if one left its box, and screen the new paths (the
             # pairs a sweep sees do not depend on the list's history).
-            if not inside(self._low, self._high, x0, x1, 0.0):
-                self._build(x0, x1, 0.0)
-                rows = self._rows
+            if not inside(pairs.low, pairs.high, x0, x1, 0.0):
+                pairs = self._build(x0, x1, 0.0)
+                rows = pairs.rows
             near = screen(
-                rows, self._gaps, self._anchor, x0, x1, self.triangles, self.edges, 0.0, d
+                rows, pairs.gaps, pairs.anchor, x0, x1, self.triangles, self.edges, 0.0, d
             )
         zoned = unresolved = 0
         checked = near
         zones = None if clear else new_zones(x0, x1, v1)
         while zones is not None:
             zoned, unresolved, done = impact_zones(
-                rows, checked, self._gaps, self.triangles, self.edges, x0, x1, v1, inv_mass,
-                MARGIN * d, zones, self._low, self._high,
+                rows, checked, pairs.gaps, self.triangles, self.edges, x0, x1, v1, inv_mass,
+                MARGIN * d, zones, pairs.low, pairs.high,
             )  # fmt: skip
             if done:
                 break
@@ -279,8 +275,8 @@ class SelfCollision:
             # paths as they are, and go on with every pair of those points
             # (the others were checked against a list that held them). Zones
             # only grow, follow a pin or are held, so this ends.
-            self._build(x0, x1, 0.0)
-            rows = self._rows
+            pairs = self._build(x0, x1, 0.0)
+            rows = pairs.rows
             outside = zones.outside
             zones.fresh[outside] = True
             outside[:] = False
@@ -288,7 +284,7 @@ class SelfCollision:
         self.report = Report(len(rows), len(near), int(contacts), int(zoned), int(unresolved))
         return self.report
 
-    def _build(self, x0: np.ndarray, x1: np.ndarray, reach: float) -> None:
+    def _build(self, x0: np.ndarray, x1: np.ndarray, reach: float) -> PairList:
         """List every pair whose points' boxes come within ``thickness``:
         each box holds the point's step ``x0 -> x1`` grown by ``reach`` (m);
         ``x0`` is the anchor of the screen.
@@ -298,10 +294,10 @@ class SelfCollision:
         inside its wider one, that list holds every such pair, so the
         result is the same pairs in the same order as a list built afresh;
         only when a box leaves is the wider list built again."""
-        self._low = np.minimum(x0, x1) - reach
-        self._high = np.maximum(x0, x1) + reach
+        low = np.minimum(x0, x1) - reach
+        high = np.maximum(x0, x1) + reach
         half = 0.5 * self.thickness
-        lo, hi = self._low - half, self._high + half
+        lo, hi = low - half, high + half
         grow = -1.0
         if self._wide_lo.shape != lo.shape or not contains(self._wide_lo, self._wide_hi, lo, hi):
             # The wider list costs more to build; it pays only while boxes
@@ -317,9 +313,9 @@ class SelfCollision:
         self._served += 1
         exact = self._served == 1 and grow == 0.0  # built from these very boxes
         rows = self._wide if exact else overlapping(self._wide, lo, hi, self.triangles, self.edges)
-        self._anchor = x0.copy()
-        self._rows = rows
-        self._gaps = pair_distances(rows, self.triangles, self.edges, self._anchor)
+        anchor = x0.copy()
+        gaps = pair_distances(rows, self.triangles, self.edges, anchor)
+        return PairList(rows, gaps, anchor, low, high)
 
     def _pairs(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """Rows ``(kind, first, second)`` of every VF and EE pair whose boxes

@@ -4,11 +4,30 @@ screen that keeps only the pairs a step can bring within reach."""
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from pvcloth.physics.self_collision._compiled import njit, prange
 from pvcloth.physics.self_collision.geometry import _closest, _corners, _dot
+
+
+class PairList(NamedTuple):
+    """What the broad phase hands every later stage of a step (the screen,
+    the response, the impulses, the zones): the pairs that may meet, and
+    where and within which boxes they were listed."""
+
+    #: (P, 3) int64: ``(kind, first, second)``, kind 0 a point and a
+    #: triangle, 1 two edges; sorted.
+    rows: np.ndarray
+    #: (P,) m: each pair's distance at the anchor.
+    gaps: np.ndarray
+    #: (N, 3) m: the positions the list was built at (the step's start).
+    anchor: np.ndarray
+    #: (N, 3) m: the box each point must stay in for the list to hold.
+    low: np.ndarray
+    high: np.ndarray
+
 
 # -- broad phase ---------------------------------------------------------------
 
