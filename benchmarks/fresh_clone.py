@@ -10,7 +10,7 @@ line each pytest run prints, and checks that the first left a movie.
 cache emptied first, as a fresh clone meets it. Nothing else should run on
 the machine meanwhile. Writes ``benchmarks/results/fresh_clone.md``.
 
-It needs root or sudo (the blocks call apt-get) and takes about 20 minutes
+It needs root or sudo (the blocks call apt-get) and takes about 15 minutes
 on 2 cores.
 """
 

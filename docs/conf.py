@@ -93,12 +93,17 @@ GENERATED = HERE / "performance" / "results"
 
 def _write_results_pages() -> None:
     import shutil
+    from collections import Counter
 
     if GENERATED.exists():
         shutil.rmtree(GENERATED)
     shutil.copytree(RESULTS, GENERATED, ignore=shutil.ignore_patterns("*.md"))
-    for table in sorted(RESULTS.glob("*.md")):
-        title, _, rest = table.read_text(encoding="utf-8").partition("\n")
+    tables = {table: table.read_text(encoding="utf-8") for table in sorted(RESULTS.glob("*.md"))}
+    titles = Counter(text.partition("\n")[0] for text in tables.values())
+    for table, text in tables.items():
+        title, _, rest = text.partition("\n")
+        if titles[title] > 1:  # one benchmark at several sizes: the menu tells them apart
+            title = f"{title} ({table.stem})"
         page = f"{title}\n\nSource: `benchmarks/results/{table.name}`.\n{rest}"
         (GENERATED / table.name).write_text(page, encoding="utf-8")
 
