@@ -56,16 +56,16 @@ hinges hold three times as much energy for a bend along that diagonal as
 for one along the rows, the columns or the other diagonal, on every grid
 from 11 to 81 points a side, so a strip cut on the bias would be stiffer
 than one cut along the threads. The plate's directions differ only by what
-its free edges leave out (6 % at 11 points a side, 0.7 % at 81), and every
+its free edges leave out (6 % at 11 points a side, 0.6 % at 81), and every
 direction converges to ``B kappa^2 / 2`` (within 1.3 % at 81 points). Hinges are also
 nonlinear: their Hessian changes every step (``fast_mass_spring`` could not
-keep one factor), and one force evaluation in NumPy cost 64 to 82 times
+keep one factor), and one force evaluation in NumPy cost 68 to 91 times
 the plate's sparse product.
 
 **Its cost and its place.** ``Q`` has 13 entries per row (the grid's
 biharmonic stencil). The compiled backend applies it inside the threaded
 spring pass (:mod:`pvcloth.physics.kernels`), NumPy through SciPy's sparse
-product; per step that costs 0.6 to 1.06 times what bending springs did
+product; per step that costs 0.63 to 1.15 times what bending springs did
 (``benchmarks/bending_cost.py``).
 """
 
