@@ -102,7 +102,7 @@ def _write_results_pages() -> None:
     titles = Counter(text.partition("\n")[0] for text in tables.values())
     for table, text in tables.items():
         title, _, rest = text.partition("\n")
-        if titles[title] > 1:  # one benchmark at several sizes: the menu tells them apart
+        if titles[title] > 1:  # one benchmark run several ways: the menu tells them apart
             title = f"{title} ({table.stem})"
         page = f"{title}\n\nSource: `benchmarks/results/{table.name}`.\n{rest}"
         (GENERATED / table.name).write_text(page, encoding="utf-8")
