@@ -363,6 +363,8 @@ PAIRED = {
     "rk23": "towel fold",
     "implicit_euler": "crumple",
     "backward_euler": "towel fold",
+    "bdf2": "twist",
+    "fast_bdf2": "corner drag",
 }
 #: Steps each explicit integrator takes from the pressed state (its step is
 #: 35 to 650 times shorter than fast_mass_spring's, chosen anew at that
@@ -371,7 +373,9 @@ PAIRED = {
 #: to 13 s a step in these scenes at 32x32, so it runs 0.1 s, and not at
 #: 64x64 (a minute a step or more).
 EXPLICIT_STEPS = 150
-IMPLICIT_SECONDS = {"implicit_euler": 0.3, "backward_euler": 0.1}
+IMPLICIT_SECONDS = {"implicit_euler": 0.3, "backward_euler": 0.1, "bdf2": 0.1, "fast_bdf2": 0.3}
+#: The references solved by Newton: too slow for 64x64 here.
+NEWTON = ("backward_euler", "bdf2")
 #: backward_euler's Newton iterations stall here at its 1/60 s step, 0.007
 #: m/s^2 short of its 0.001 m/s^2 tolerance after 200 iterations (the
 #: drag at 0.7 s, springs crushed in the pile): a limit of that solver, which raises
@@ -471,7 +475,7 @@ def pressed_state(tmp_path_factory, worker_id):
 def _integrators():
     """The quick and validation pairs, then the exhaustive product."""
     for integrator, name in sorted(PAIRED.items()):
-        sizes = [(QUICK_N, None), (32 if integrator == "backward_euler" else 64, "validation")]
+        sizes = [(QUICK_N, None), (32 if integrator in NEWTON else 64, "validation")]
         for n, tier in sizes:
             if (name, n, integrator) in EXHAUSTIVE_ONLY:
                 tier = "exhaustive"
@@ -484,12 +488,12 @@ def _integrators():
             for integrator in sorted(INTEGRATORS):
                 if integrator == "fast_mass_spring":  # it plays each whole scene above
                     continue
-                if (integrator == "backward_euler" and n > 32) or (name, n) == ("sphere drape", 64):
+                if (integrator in NEWTON and n > 32) or (name, n) == ("sphere drape", 64):
                     continue
-                if PAIRED[integrator] == name and (n == 64 or integrator == "backward_euler"):
+                if PAIRED[integrator] == name and (n == 64 or integrator in NEWTON):
                     continue  # a validation pair already
                 marks = [pytest.mark.exhaustive]
-                if integrator == "backward_euler" and name == "corner drag":
+                if integrator in NEWTON and name == "corner drag":
                     marks.append(NEWTON_STALLS)
                 yield pytest.param(
                     name, n, integrator, id=f"{name}-{n}-{integrator}", marks=marks

@@ -205,6 +205,7 @@ class Simulation(Clocks, LiveEdits, Pins):
         self.steps = 0
         #: Simulated seconds asked for (by advance) but not yet stepped: less than dt.
         self.owed = 0.0
+        self.integrator.restart()  # a multistep method starts again
         self._state_changed()
 
     @property
@@ -269,6 +270,7 @@ class Simulation(Clocks, LiveEdits, Pins):
         np.copyto(spare.v, v)
         spare.t = t
         self._spare, self._state, self._public = self._state, spare, None
+        self.integrator.restart()  # an edited state has no past a multistep method may use
         self._state_changed()
 
     def _state_changed(self) -> None:

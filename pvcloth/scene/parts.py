@@ -223,7 +223,9 @@ AUTO = "auto"
 DEFAULT_MIN_DT, DEFAULT_MAX_DT = 1e-9, 0.05
 INTEGRATOR_NAMES = (
     "backward_euler",
+    "bdf2",
     "explicit_euler",
+    "fast_bdf2",
     "fast_mass_spring",
     "implicit_euler",
     "rk23",
@@ -235,7 +237,14 @@ INTEGRATOR_NAMES = (
 #: choose their steps (``embedded`` in :mod:`pvcloth.physics.integrators`;
 #: a test keeps the two equal, so the command line can say so without
 #: importing the physics).
-MEASURING_INTEGRATORS = ("backward_euler", "fast_mass_spring", "implicit_euler", "rk23")
+MEASURING_INTEGRATORS = (
+    "backward_euler",
+    "bdf2",
+    "fast_bdf2",
+    "fast_mass_spring",
+    "implicit_euler",
+    "rk23",
+)
 
 
 @dataclass(frozen=True)

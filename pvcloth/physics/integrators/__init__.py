@@ -6,7 +6,9 @@ decorate it with :func:`register` and import the module here.
 
 from pvcloth.physics.integrators import (  # noqa: F401  (importing registers them)
     backward_euler,
+    bdf2,
     explicit_euler,
+    fast_bdf2,
     fast_mass_spring,
     implicit_euler,
     rk4,

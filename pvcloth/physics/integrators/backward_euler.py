@@ -107,15 +107,38 @@ class BackwardEuler(Integrator):
         self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
         x, v = state.x, state.v
+        # Explicit drift as the start (a start from the last step's change
+        # of velocity was measured to save nothing); pinned points where the
+        # simulation sends them (it set their velocity).
+        end = self.solve(model, control, x, v, dt, x + dt * v, state.t)
+        v_new = (end - x) / dt
+        self.error = drift_error(dt, v, v_new)
+        return State(end, v_new, state.t + dt)
+
+    def solve(
+        self,
+        model: Model,
+        control: Control,
+        x: np.ndarray,
+        v: np.ndarray,
+        dt: float,
+        guess: np.ndarray,
+        t: float,
+    ) -> np.ndarray:
+        """The end positions ``x'`` (m, ``(N, 3)``) of the implicit equation
+        ``x' = x + dt v + dt^2 M^-1 F(x', (x' - x) / dt)``, by Newton from
+        ``guess`` (which holds the pinned points' end positions: they stay).
+
+        Backward Euler's step of length ``dt`` takes ``x``, ``v`` from the
+        start of the step; BDF2 (:mod:`~pvcloth.physics.integrators.bdf2`)
+        has the same equation with its combinations of the last two steps
+        for ``x``, ``v`` and two thirds of its step for ``dt``. ``t`` (s) only names the step in
+        the error raised when Newton does not converge."""
         table = model.spring_table()
         # The pattern depends only on the springs' ends, which never change
         # for a model: kept until another model comes.
         if self._pattern is None or self._pattern[0] != model.serial:
             self._pattern = (model.serial, BlockPattern(table.a, table.b, model.n_points))
-        # Explicit drift as the start (a start from the last step's change
-        # of velocity was measured to save nothing); pinned points where the
-        # simulation sends them (it set their velocity).
-        guess = x + dt * v
         potential = _StepPotential(model, x, v, dt, control.inv_mass, self._pattern[1])
         potential.anchor(guess)
         residual = potential.residual(guess)
@@ -129,9 +152,7 @@ class BackwardEuler(Integrator):
                 size = np.abs(residual).max() / dt**2
             if size <= self.tolerance:
                 self.last_iterations, self.last_factorisations = count, factorisations
-                v_new = (guess - x) / dt
-                self.error = drift_error(dt, v, v_new)
-                return State(guess, v_new, state.t + dt)
+                return guess
             if count == self.iterations:
                 break
             # Far from the solution the clamped, positive definite Hessian
@@ -162,7 +183,7 @@ class BackwardEuler(Integrator):
             residual = potential.residual(guess)
             size = np.abs(residual).max() / dt**2
         raise DivergenceError(
-            f"backward Euler did not converge at t = {state.t:.6g} s: Newton's method left "
+            f"{self.name} did not converge at t = {t:.6g} s: Newton's method left "
             f"{size:.3g} m/s^2 unbalanced after {count} iterations (tolerance "
             f"{self.tolerance:g} m/s^2); a smaller dt converges in fewer"
         )

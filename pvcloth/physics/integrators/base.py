@@ -122,6 +122,12 @@ class Integrator(ABC):
         mode = stiffest_mode(model, state.x, state.v, control.inv_mass)
         return largest_stable_step(type(self), mode.omega, mode.alpha)
 
+    def restart(self) -> None:
+        """Forget what the integrator carries between steps (the simulation
+        calls it when the state is reset or replaced by hand): a multistep
+        method starts again from the new state alone. Nothing, by default."""
+        return None
+
     def get_state(self) -> dict[str, np.ndarray]:
         """Arrays the integrator carries between steps (saved in checkpoints)."""
         return {}

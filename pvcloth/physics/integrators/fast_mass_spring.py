@@ -91,14 +91,14 @@ class FastMassSpring(Integrator):
 
     # -- the constant parts ------------------------------------------------------
 
-    def _prepare(self, model: Model, control: Control, dt: float) -> _Factor:
+    def _prepare(self, model: Model, control: Control, h: float, air: float) -> _Factor:
         # Rebuilt when the step, a spring constant (model.revision) or the
         # pinned set (control.revision) changed: revisions are never reused,
         # by another model or control either, so no array is compared.
-        key = (dt, model.revision, control.revision)
+        key = (h, air, model.revision, control.revision)
         factor = self._factors.pop(key, None)
         if factor is None:
-            factor = _factorise(model, control, dt)
+            factor = _factorise(model, control, h, air)
             self.factorisations += 1
         self._factors[key] = factor  # the most recently used last
         while len(self._factors) > KEPT_FACTORS:
@@ -115,14 +115,46 @@ class FastMassSpring(Integrator):
     def step(
         self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
-        factor = self._prepare(model, control, dt)
         x, v = state.x, state.v
         other = np.zeros_like(x)
         model.add_other_forces(x, v, other)
-        y = x + dt * v + dt * dt * other * control.inv_mass[:, None]
+        end = self.solve(model, control, x, v, dt, other, x + dt * v)
+        v_new = (end - x) / dt
+        self.error = drift_error(dt, v, v_new)
+        return State(end, v_new, state.t + dt)
+
+    def solve(
+        self,
+        model: Model,
+        control: Control,
+        x: np.ndarray,
+        v: np.ndarray,
+        h: float,
+        load: np.ndarray,
+        targets: np.ndarray,
+        air: float = 0.0,
+    ) -> np.ndarray:
+        """End positions ``x'`` (m, ``(N, 3)``) of ``x' = x + h v'`` and
+        ``v' = v + h M^-1 (F_springs(x') + load - air M v')`` by
+        :attr:`iterations` local/global iterations.
+
+        ``load`` (N, ``(N, 3)``) holds the forces taken explicitly (all but
+        the springs' and the plate's for backward Euler); ``air`` (1/s) is
+        an air damping taken implicitly, in the matrix (``0``: none, or in
+        ``load``). Pinned points end at ``targets`` (m, ``(N, 3)``; the
+        pinned rows are read). Backward Euler's step passes its start and
+        its step; BDF2 (:class:`~pvcloth.physics.integrators.fast_bdf2.FastBDF2`)
+        its combinations of the last two states and two thirds of its step.
+        The result may be a buffer of this integrator's: copy it before the
+        next call."""
+        factor = self._prepare(model, control, h, air)
+        # The global step's right-hand side: M (1 + air h) x + h M v + h^2 load
+        y = x + h * v + h * h * load * control.inv_mass[:, None]
         fixed = factor.fixed
-        pinned_next = x[fixed] + dt * v[fixed]  # the simulation set their velocity
+        pinned_next = targets[fixed]
         base = model.mass[:, None] * y
+        if air:
+            base += (air * h) * model.mass[:, None] * x
         base -= factor.coupling @ pinned_next
         base[fixed] = pinned_next
         guess = y
@@ -151,9 +183,7 @@ class FastMassSpring(Integrator):
         if guess is not y:
             y[...] = guess  # the result lives in the step's own array
             guess = y
-        v_new = (guess - x) / dt
-        self.error = drift_error(dt, v, v_new)
-        return State(guess, v_new, state.t + dt)
+        return guess
 
 
 #: Factorisations :class:`FastMassSpring` keeps (the most recently used).
@@ -170,9 +200,10 @@ class _Factor:
     weight: np.ndarray  # (S,) h^2 k per spring
 
 
-def _factorise(model: Model, control: Control, dt: float) -> _Factor:
-    """The global step's matrix ``M + h^2 (G^T K G + Q)`` for this step,
-    factorised (``Q`` the plate bending's, when the model has it)."""
+def _factorise(model: Model, control: Control, dt: float, air: float = 0.0) -> _Factor:
+    """The global step's matrix ``M (1 + air dt) + dt^2 (G^T K G + Q)`` for
+    this step, factorised (``Q`` the plate bending's, when the model has it;
+    ``air`` the rate, 1/s, of an air damping taken implicitly)."""
     springs = model.spring_table()
     n = model.n_points
     # Incidence: row s of G is e_a - e_b for spring s.
@@ -184,7 +215,7 @@ def _factorise(model: Model, control: Control, dt: float) -> _Factor:
     laplacian = (incidence.T @ sp.diags(springs.stiffness) @ incidence).tocsr()  # G^T K G
     if model.bending_matrix is not None:  # energy x^T Q x / 2: the solve takes it whole
         laplacian = laplacian + model.bending_matrix
-    system = (sp.diags(model.mass) + dt * dt * laplacian).tocsr()
+    system = (sp.diags(model.mass * (1.0 + air * dt)) + dt * dt * laplacian).tocsr()
     # Pinned points stay in the system as identity rows and columns, so
     # that every array has all N points and no iteration gathers or
     # scatters the free ones: x_p = target there, and the coupling

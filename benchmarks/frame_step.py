@@ -1,0 +1,186 @@
+"""Second order at frame steps: each implicit method's error at 0.5 s and 1 s
+on cotton falling from flat, against its cost.
+
+``python benchmarks/frame_step.py`` runs the bundled cotton scene
+(``data/scenes/cotton.toml``: 1 m square, 2112 N/m, 0.22 kg/m^2, plate
+bending, air damping 1/s, held by two corners, starting flat) from rest,
+one method after another in one process. ``NAME:K`` runs ``NAME`` with
+``solver.iterations = K``; ``NAME@S`` takes ``S`` steps per 1/60 s frame
+(one by default).
+
+For each: the RMS distance of the points from a reference at 0.5 s and at
+1 s; the total energy (kinetic, gravity's and the springs') at 1 s; the
+median wall time per 1/60 s frame (everything the simulation does) and the
+real-time factor over the whole second. The reference is RK4 at symplectic
+Euler's automatic step (written independently of the implicit solvers; its
+distance from RK4 at half that step is printed under the table). For the
+methods solved by a fixed count of iterations the distance from the method
+they approximate, solved to convergence at the same step (``converges_to``:
+``backward_euler`` or ``bdf2``, Newton until no point has 1e-3 m/s^2
+unbalanced), is the *solver* part of their error. The dashpots that
+``fast_mass_spring`` and ``fast_bdf2`` leave out are measured as converged
+BDF2's distance with and without them. Writes ``benchmarks/results/frame_step.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+from provenance import provenance
+from smoke import SMOKE
+
+import pvcloth
+from pvcloth.physics.reference import rms_distance
+from pvcloth.studies.runs import dividing_step
+
+HERE = Path(__file__).parent
+FRAME = 1 / 60
+#: Frames run, and the two at which the error is measured (0.5 s and 1 s).
+FRAMES, CHECKS = (6, (3, 6)) if SMOKE else (60, (30, 60))
+#: The fast methods first, timed while nothing else runs; the Newton
+#: references (seconds per step) after them.
+METHODS = (
+    "fast_mass_spring:10",
+    "fast_mass_spring:20",
+    "fast_bdf2:10",
+    "fast_bdf2:20",
+    "fast_bdf2:50",
+    "fast_bdf2:200",
+    "backward_euler",
+    "bdf2",
+    "bdf2@2",
+)
+
+
+def parse(method: str) -> tuple[str, int | None, int]:
+    """``"fast_bdf2:20@2"`` -> ``("fast_bdf2", 20, 2)``."""
+    head, _, per_frame = method.partition("@")
+    name, _, iterations = head.partition(":")
+    return name, int(iterations) if iterations else None, int(per_frame or 1)
+
+
+def run(scene, method: str, frames: int) -> dict:
+    """Positions at each check, energy at the end, wall time per frame."""
+    name, iterations, per_frame = parse(method)
+    if iterations:
+        scene = scene.with_overrides({"solver.iterations": iterations})
+    sim = pvcloth.Simulation(scene, integrator=name, dt=FRAME / per_frame, stability="ignore")
+    positions, walls = {}, []
+    for frame in range(1, frames + 1):
+        start = time.perf_counter()
+        sim.advance(FRAME)
+        walls.append(time.perf_counter() - start)
+        if frame in CHECKS:
+            positions[frame] = sim.positions.copy()
+    return {
+        "sim": sim,
+        "positions": positions,
+        "energy": energy(sim),
+        "ms": 1e3 * statistics.median(walls),
+        "real_time": sim.time / sum(walls),
+    }
+
+
+def energy(sim) -> float:
+    """Kinetic plus potential energy (J) of the current state."""
+    return sim.model.kinetic_energy(sim.velocities) + sim.model.potential_energy(sim.positions)
+
+
+def undamped(scene):
+    """``scene`` with every spring's dashpot removed (the families it has)."""
+    families = [f for f in ("structural", "shear", "bending") if getattr(scene.springs, f)]
+    return scene.with_overrides({f"springs.{family}.damping": 0.0 for family in families})
+
+
+def pair(a: dict, b: dict) -> str:
+    """``a`` against ``b`` at each check, in centimetres."""
+    return " / ".join(f"{100 * rms_distance(a[k], b[k]):.2f}" for k in CHECKS)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--size", type=int, default=8 if SMOKE else 64)
+    parser.add_argument("--methods", nargs="+", default=list(METHODS))
+    parser.add_argument("--out", default=str(HERE / "results" / "frame_step.md"))
+    args = parser.parse_args()
+    frames = FRAMES
+    scene = pvcloth.load_scene(HERE.parent / "data" / "scenes" / "cotton.toml")
+    scene = scene.with_resolution(args.size)
+    explicit = pvcloth.Simulation(scene, integrator="symplectic_euler").dt
+    step = dividing_step(FRAME, explicit)
+    truths = []
+    for dt in (step, step / 2):
+        truth = pvcloth.Simulation(scene, integrator="rk4", dt=dt, stability="ignore")
+        kept = {}
+        for frame in range(1, frames + 1):
+            truth.advance(FRAME)
+            if frame in CHECKS:
+                kept[frame] = truth.positions.copy()
+        truths.append((kept, energy(truth)))
+        print({"reference dt": dt, "energy": truths[-1][1]}, flush=True)
+    (truth, truth_energy), (half, _) = truths
+    results = {}
+    for method in args.methods:
+        results[method] = run(scene, method, frames)
+        error = pair(results[method]["positions"], truth)
+        print({"method": method, "error cm": error, "ms": results[method]["ms"]}, flush=True)
+    free = run(undamped(scene), "bdf2", frames)
+    lines = [
+        "# Second order at frame steps",
+        "",
+        provenance(),
+        "",
+        f"`python benchmarks/frame_step.py{''.join(' ' + a for a in sys.argv[1:])}`: the "
+        f"cotton scene at {args.size}x{args.size} points (1 m square, 2112 N/m, 0.22 kg/m^2, "
+        "plate bending, air damping 1/s, two corners pinned) falling from flat and at rest, "
+        "each method in turn in one process. *error* = RMS point distance from RK4 at "
+        f"{step:.3g} s steps, at 0.5 s / 1 s (cm); *solver* = distance from the converged "
+        "method it approximates at the same step (`backward_euler` or `bdf2`: Newton until no "
+        "point has more than 1e-3 m/s^2 unbalanced); energy = kinetic + gravity + springs + "
+        f"plate at 1 s (RK4: {truth_energy:.4f} J); ms = median wall time per 1/60 s frame; "
+        "real time = simulated over wall seconds for the whole second (2 = twice as fast as "
+        "real time). `NAME:K` = K local/global iterations per step, `@2` = two steps per "
+        "frame.",
+        "",
+        "| method | dt (s) | error (cm) | solver (cm) | energy at 1 s (J) | ms per 1/60 s "
+        "| real time |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for method, r in results.items():
+        sim = r["sim"]
+        target = sim.integrator.converges_to
+        twin = next(
+            (
+                other
+                for name, other in results.items()
+                if parse(name)[0] == target and other["sim"].dt == sim.dt
+            ),
+            None,
+        )
+        solver = pair(r["positions"], twin["positions"]) if twin else "-"
+        lines.append(
+            f"| {method} | {sim.dt:.4g} | {pair(r['positions'], truth)} | {solver} "
+            f"| {r['energy']:.4f} | {r['ms']:.1f} | {r['real_time']:.2f} |"
+        )
+    converged = results.get("bdf2")
+    lines += [
+        "",
+        f"The reference: RK4 at half its step ends {pair(half, truth)} cm from it. ",
+    ]
+    if converged is not None:
+        lines[-1] += (
+            "The dashpots `fast_mass_spring` and `fast_bdf2` leave out: converged BDF2 with and "
+            f"without them ends {pair(free['positions'], converged['positions'])} cm apart, "
+            f"and without them {pair(free['positions'], truth)} cm from RK4."
+        )
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.out).write_text("\n".join(lines) + "\n")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,90 @@
+"""BDF2 by local/global iterations on one prefactorised matrix: the second-order
+twin of ``fast_mass_spring``."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from pvcloth.physics.integrators.base import register
+from pvcloth.physics.integrators.bdf2 import History, bdf2_error, bdf2_start
+from pvcloth.physics.integrators.fast_mass_spring import FastMassSpring
+from pvcloth.physics.state import Control, State
+
+if TYPE_CHECKING:  # for annotations only: the model module imports no integrator
+    from pvcloth.physics.model import Model
+
+
+@register
+class FastBDF2(FastMassSpring):
+    """BDF2 (:class:`~pvcloth.physics.integrators.bdf2.BDF2`) solved as
+    ``fast_mass_spring`` solves backward Euler: local/global iterations,
+    accelerated by Chebyshev's method, on one factorised matrix.
+
+    BDF2's step is backward Euler's equation with the combinations of the
+    last two states in place of the start and two thirds of the step
+    (:func:`~pvcloth.physics.integrators.bdf2.bdf2_start`), so the global
+    matrix is ``M (1 + r h) + h^2 (K + Q)`` with ``h = 2 dt / 3``: constant
+    while the step is, factorised once. Air damping (rate ``r``) is in that
+    matrix, implicit; gravity is constant; the wind is taken at the state
+    extrapolated from the last two to the step's end (``2 y - y_prev`` at a
+    constant step), second order like the rest. The springs' dashpots are
+    left out, as ``fast_mass_spring`` leaves them out (their share of the
+    error is measured in ``benchmarks/results/frame_step.md``). The first
+    step, and the first after
+    a reset or an edit of the state, is ``fast_mass_spring``'s. Stopped
+    after :attr:`iterations`, the step is not BDF2's answer: its distance
+    from :class:`~pvcloth.physics.integrators.bdf2.BDF2` at the same step
+    is the solver's share of its error, the time discretisation's being
+    ``bdf2``'s own.
+
+    Parameters
+    ----------
+    iterations : int
+        Local/global iterations per step.
+    rho : float
+        Chebyshev's estimate of the plain iteration's contraction (0 <= rho < 1).
+    """
+
+    name, order = "fast_bdf2", 2  # registry key; global order of accuracy when converged
+    description = "BDF2 by local/global iterations, prefactorised (second order when converged)"
+    converges_to = "bdf2"
+
+    def __init__(self, iterations: int = 10, rho: float = 0.95):
+        super().__init__(iterations, rho)
+        self.history = History()
+        #: Whether the last step was the backward Euler start-up.
+        self.started_up = False
+
+    def restart(self) -> None:
+        self.history.clear()
+
+    def step(
+        self, model: Model, state: State, control: Control, dt: float, out: State | None = None
+    ) -> State:
+        last = self.history.before(state)
+        self.started_up = last is None
+        if last is None:
+            result = super().step(model, state, control, dt, out)
+            self.history.after(state, dt)
+            return result
+        x, v = state.x, state.v
+        x_hat, v_hat, h = bdf2_start(last, x, v, dt)
+        load = np.zeros_like(x)
+        model.add_gravity(x, v, load)
+        if model.wind is not None:  # at the state extrapolated to the step's end
+            w = dt / last.dt
+            model.add_wind(x + w * (x - last.x), v + w * (v - last.v), load)
+        end = self.solve(model, control, x_hat, v_hat, h, load, x + dt * v, air=model.air_rate)
+        v_new = (end - x_hat) / h
+        v_new[control.pinned] = v[control.pinned]
+        self.error = bdf2_error(last, v, v_new, dt)
+        self.history.after(state, dt)
+        return State(end, v_new, state.t + dt)
+
+    def get_state(self) -> dict[str, np.ndarray]:
+        return self.history.get_state()
+
+    def set_state(self, state: dict[str, np.ndarray]) -> None:
+        self.history.set_state(state)
