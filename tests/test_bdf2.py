@@ -12,7 +12,7 @@ from test_physics import two_body
 
 import pvcloth
 from conftest import SCENES, small_scene
-from pvcloth import Control, PinSpec, Simulation, State
+from pvcloth import Control, InputError, PinSpec, Simulation, State
 from pvcloth.physics.integrators.bdf2 import BDF2, Step
 
 
@@ -135,3 +135,13 @@ def test_second_order_on_a_cloth_against_rk4():
         errors.append(float(np.sqrt(((sim.positions - reference.positions) ** 2).sum(1).mean())))
     ratios = [a / b for a, b in zip(errors, errors[1:], strict=False)]
     assert all(3.6 < r < 4.4 for r in ratios), (errors, ratios)
+
+
+def test_fast_bdf2_refuses_fewer_than_ten_iterations():
+    """Fewer were measured to gain energy without bound (FastBDF2's
+    docstring): refused with the reason (the window's i key passes over it:
+    test_interaction.py)."""
+    scene = small_scene(6, integrator="fast_bdf2", dt=1 / 60, stability="ignore")
+    with pytest.raises(InputError, match="at least 10 iterations a step, got 6"):
+        Simulation(scene.with_overrides({"solver.iterations": 6}))
+    Simulation(scene.with_overrides({"solver.iterations": 10})).advance(0.1)

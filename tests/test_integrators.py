@@ -39,7 +39,9 @@ def test_free_fall(integrator):
     sim.advance(0.5)
     drop = sim.model.rest_positions[:, 2] - sim.positions[:, 2]
     exact = 0.5 * 9.81 * 0.5**2
-    if INTEGRATORS[integrator].order >= 2:
+    if integrator in ("bdf2", "fast_bdf2"):  # exact but for the start-up (test_bdf2.py)
+        np.testing.assert_allclose(drop, exact + 0.75 * 9.81 * 1e-3**2, rtol=1e-9)
+    elif INTEGRATORS[integrator].order >= 2:
         np.testing.assert_allclose(drop, exact, rtol=1e-10)  # exact for constant a
     else:
         np.testing.assert_allclose(drop, exact, atol=9.81 * 0.5 * 1e-3)  # O(h): g t h
@@ -59,14 +61,21 @@ def test_a_moving_pin_is_honoured(integrator):
 
 def oscillator_error(integrator, steps, duration=0.5):
     """Error of one integrator on two bodies and a spring, against the exact
-    solution: the separation is ``L0 + A cos(omega t)`` along the axis."""
+    solution: the separation is ``L0 + A cos(omega t)`` along the axis.
+
+    The methods that iterate run 50 iterations: the order is their time
+    discretisation's. At their default 10 the solver's error can dominate:
+    on two bodies the plain local/global iteration contracts far faster than
+    the 0.95 Chebyshev assumes, and ``fast_bdf2``'s error stalls at 1 mm
+    (see :class:`~pvcloth.physics.integrators.fast_mass_spring.FastMassSpring`)."""
     model, k = two_body()
     mu = 1.0 * 0.5 / 1.5
     omega = math.sqrt(k / mu)
     x = model.rest_positions.copy()
     x[1, 0] += 0.1
     state = State(x, np.zeros_like(x))
-    method, control = get_integrator(integrator), Control.from_model(model)
+    iterations = 50 if INTEGRATORS[integrator].iterative else None
+    method, control = get_integrator(integrator, iterations), Control.from_model(model)
     dt = duration / steps
     for _ in range(steps):
         state = method.step(model, state, control, dt)

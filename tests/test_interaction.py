@@ -315,11 +315,33 @@ def test_with_a_tolerance_i_cycles_the_methods_that_measure_their_error(tmp_path
     app.physics.start()
     try:
         seen = []
-        for _ in range(3):
+        for _ in range(4):
             press_key(app, "i")
             seen.append(app.sim.integrator.name)
             assert app.sim.controller is not None and "refused" not in app.status.GetInput()
-        assert seen == ["fast_mass_spring", "implicit_euler", "rk23"]
+        assert seen == ["fast_bdf2", "fast_mass_spring", "implicit_euler", "rk23"]
+    finally:
+        app.close()
+
+
+def test_i_passes_over_a_method_that_needs_more_iterations_than_the_scene_gives(tmp_path):
+    """A scene with 6 iterations: fast_bdf2 would refuse them (it needs 10),
+    so the key cycles through the others without a refusal."""
+    from pvcloth.visual.window import ClothApp
+
+    scene = pvcloth.load_scene(SCENES / "hanging.toml").with_resolution(8)
+    sim = Simulation(scene.with_overrides({"solver.iterations": 6}))
+    app = ClothApp(sim, off_screen=True, window_size=(320, 240), shot_folder=tmp_path)
+    app.plotter.show(auto_close=False, interactive_update=False)
+    app.physics.paused = True
+    app.physics.start()
+    try:
+        seen = set()
+        for _ in range(8):
+            press_key(app, "i")
+            seen.add(app.sim.integrator.name)
+            assert "refused" not in app.status.GetInput()
+        assert "fast_mass_spring" in seen and "fast_bdf2" not in seen
     finally:
         app.close()
 

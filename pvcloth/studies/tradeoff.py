@@ -10,17 +10,18 @@ stable. Runs go through :class:`~pvcloth.physics.simulation.Simulation` with
 ``stability="ignore"``, so steps above the limit really run and show as
 unstable.
 
-The implicit methods that approximate backward Euler (``implicit_euler``:
-one linearised Newton step; ``fast_mass_spring``: a few local/global
-iterations, no dashpots) have their error split in two with the converged
-``backward_euler`` run at the same step: the **time discretisation** error
-(backward Euler's own distance from the reference: only a smaller step
-lowers it) and the **solver** error (the method's distance from backward
-Euler at that step: what stopping early, or leaving terms out, costs; more
-iterations lower it).
+The implicit methods that approximate a converged one (``implicit_euler``:
+one linearised Newton step, and ``fast_mass_spring``: a few local/global
+iterations, no dashpots, approximate ``backward_euler``; ``fast_bdf2``
+approximates ``bdf2`` the same way) have their error split in two with the
+converged run at the same step: the **time discretisation** error (the
+converged method's own distance from the reference: only a smaller step
+lowers it) and the **solver** error (the method's distance from it at that
+step: what stopping early, or leaving terms out, costs; more iterations
+lower it).
 
 The methods that measure their own error (``rk23``, ``implicit_euler``,
-``fast_mass_spring``) also run with ``solver.tolerance`` at a few
+``fast_mass_spring``, ``fast_bdf2``) also run with ``solver.tolerance`` at a few
 tolerances, their steps chosen by the controller
 (:mod:`pvcloth.physics.adaptive`): these join the plot as dashed lines,
 their step the mean one (simulated time over steps), so a glance shows what
@@ -50,9 +51,6 @@ from pvcloth.physics.reference import (
 from pvcloth.physics.simulation import Simulation
 from pvcloth.studies.runs import dividing_step, timed_run
 
-#: The converged method the approximate implicit ones are split against.
-CONVERGED = "backward_euler"
-
 
 @dataclass
 class Run:
@@ -65,10 +63,10 @@ class Run:
     energy_drift: float  # relative; nan if unstable
     wall_per_sim_second: float  # s of wall time per s of simulated time
     steps: int
-    #: For methods that approximate backward Euler: the converged backward
-    #: Euler run's RMS distance from the reference at this step (m) ...
+    #: For methods that approximate a converged one (``converges_to``): the
+    #: converged run's RMS distance from the reference at this step (m) ...
     discretisation_error: float = math.nan
-    #: ... and this run's RMS distance from that backward Euler run (m).
+    #: ... and this run's RMS distance from that converged run (m).
     solver_error: float = math.nan
     #: The tolerance (m) an adaptive run's steps were chosen for (``dt`` is
     #: then its mean step); nan for a fixed step.
@@ -94,15 +92,14 @@ def default_steps(scene, count: int = 8) -> list[float]:
 
 def plan(scene, integrators=None, steps=None, duration=0.25, tolerances=None):
     """The runs :func:`measure` makes: ``(names, steps, jobs)``, each job
-    ``(integrator, step or None, tolerance or None)``, backward Euler first."""
+    ``(integrator, step or None, tolerance or None)``, the converged methods
+    the others approximate first."""
     integrators = sorted(INTEGRATORS) if integrators is None else list(integrators)
     steps = default_steps(scene) if steps is None else sorted(steps)
     # Every run ends exactly at `duration` (see dividing_step).
     steps = sorted({dividing_step(duration, dt) for dt in steps})
-    approximate = {n for n in integrators if INTEGRATORS[n].converges_to == CONVERGED}
-    names = ([CONVERGED] if approximate or CONVERGED in integrators else []) + [
-        n for n in integrators if n != CONVERGED
-    ]
+    converged = converged_references(integrators)
+    names = converged + [n for n in integrators if n not in converged]
     jobs = [(name, dt, None) for name in names for dt in steps]
     for name in integrators:
         method = INTEGRATORS[name]
@@ -110,6 +107,15 @@ def plan(scene, integrators=None, steps=None, duration=0.25, tolerances=None):
             chosen = DEFAULT_TOLERANCES.get(method.order, ()) if tolerances is None else tolerances
             jobs += [(name, None, tolerance) for tolerance in chosen]
     return names, steps, jobs
+
+
+def converged_references(integrators) -> list[str]:
+    """The converged methods (``backward_euler``, ``bdf2``) that ``integrators``
+    approximate or name, each once, sorted: they run first so that the
+    approximate ones can be split against them."""
+    wanted = {INTEGRATORS[n].converges_to for n in integrators} - {None}
+    wanted |= {n for n in integrators if n in {m.converges_to for m in INTEGRATORS.values()}}
+    return sorted(wanted)
 
 
 def estimate_seconds(scene, integrators=None, steps=None, duration=0.25, tolerances=None) -> float:
@@ -171,10 +177,10 @@ def measure(
     x_ref, e_ref = truth.positions, truth.energy()["total"]
     scale = max(abs(e_ref), truth.model.kinetic_energy(truth.velocities), 1e-12)
     runs = []
-    # The converged backward Euler runs come first, so that the methods
-    # approximating it can be split against them.
-    approximate = {n for n in integrators if INTEGRATORS[n].converges_to == CONVERGED}
-    converged: dict[float, np.ndarray] = {}  # step -> backward Euler's positions there
+    # The converged runs come first, so that the methods approximating
+    # them can be split against them.
+    references = set(converged_references(integrators))
+    converged: dict[tuple[str, float], np.ndarray] = {}  # (name, step) -> its positions
     for name, dt, tolerance in tqdm(jobs, desc="trade-off runs", unit="run", disable=not progress):
         run = timed_run(scene, duration, integrator=name, dt=dt, tolerance=tolerance)
         if tolerance is not None:
@@ -183,12 +189,13 @@ def measure(
         if run.stable:
             error = rms_distance(run.sim.positions, x_ref)
             drift = (run.sim.energy()["total"] - e_ref) / scale
-            if name == CONVERGED and tolerance is None:
-                converged[dt] = run.sim.positions
-            elif name in approximate and tolerance is None and dt in converged:
+            target = (INTEGRATORS[name].converges_to, dt)
+            if name in references and tolerance is None:
+                converged[(name, dt)] = run.sim.positions
+            elif tolerance is None and target in converged:
                 split = (
-                    rms_distance(converged[dt], x_ref),
-                    rms_distance(run.sim.positions, converged[dt]),
+                    rms_distance(converged[target], x_ref),
+                    rms_distance(run.sim.positions, converged[target]),
                 )
         else:
             error = drift = math.nan
@@ -238,9 +245,9 @@ def write_csv(runs: list[Run], path: Path) -> None:
 
 #: One colour and one marker per integrator, in the order of their names:
 #: matplotlib's ten colours without its grey (C7), which the Pareto front and
-#: the guide lines use, so no integrator reads as one of them.
-PLOT_COLORS = ("C0", "C1", "C2", "C3", "C4", "C5", "C6", "C8", "C9")
-PLOT_MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*", "h")
+#: the guide lines use, so no integrator reads as one of them, and navy.
+PLOT_COLORS = ("C0", "C1", "C2", "C3", "C4", "C5", "C6", "C8", "C9", "navy")
+PLOT_MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*", "h", "p")
 
 
 def step_label(dt: float) -> str:
@@ -402,7 +409,7 @@ def table(runs: list[Run]) -> str:
         lines.append("tol: an adaptive run's tolerance; its dt is the mean step it took")
     if split:
         lines.append(
-            "time: converged backward Euler's error at that step; solver: the run's distance "
-            "from it (stopping early, terms left out)"
+            "time: the converged method's error at that step (backward_euler's, or bdf2's "
+            "for fast_bdf2); solver: the run's distance from it (stopping early, terms left out)"
         )
     return "\n".join(lines)

@@ -486,16 +486,21 @@ class ClothApp:
         under half its stable step and, with self-collision, the contact
         step: see :meth:`Simulation.automatic_dt
         <pvcloth.physics.simulation.Simulation.automatic_dt>`); the
-        measuring-only ones (``backward_euler``) are left out, and with a
-        tolerance those that cannot measure their error (every key press
-        would be refused)."""
+        measuring-only ones (``backward_euler``, ``bdf2``) are left out,
+        and with a tolerance those that cannot measure their error, and
+        those that need more iterations than the scene gives (every key
+        press would be refused)."""
 
         def switch():  # on the physics thread, which owns the simulation
-            adaptive = self.sim.scene.solver.tolerance is not None
+            solver = self.sim.scene.solver
+            adaptive = solver.tolerance is not None
+            iterations = solver.iterations
             names = sorted(
                 name
                 for name, cls in INTEGRATORS.items()
-                if cls.interactive and (cls.embedded or not adaptive)
+                if cls.interactive
+                and (cls.embedded or not adaptive)
+                and (iterations is None or iterations >= cls.min_iterations)
             )
             current = self.sim.integrator.name
             at = names.index(current) + 1 if current in names else 0

@@ -70,6 +70,9 @@ class Integrator(ABC):
         last step made, when the step found them on its way (the compiled
         symplectic step does), so the divergence guard need not look again;
         ``None`` otherwise.
+    min_iterations : int
+        The fewest iterations a step of an ``iterative`` one may take
+        (fewer are refused when it is made).
     uses_blas : bool
         Whether its step calls BLAS (linear solves, long dot products): the
         simulation then holds BLAS to one thread around it
@@ -81,6 +84,7 @@ class Integrator(ABC):
     order: int = 1
     description: str = ""
     iterative: bool = False
+    min_iterations: int = 1
     converges_to: str | None = None
     interactive: bool = True
     uses_blas: bool = False

@@ -53,7 +53,7 @@ def bdf2_start(last: Step, x: np.ndarray, v: np.ndarray, dt: float):
     >>> from pvcloth.physics.integrators.bdf2 import Step, bdf2_start
     >>> last = Step(np.zeros((1, 3)), np.zeros((1, 3)), dt=0.1, end=0.1)
     >>> x_hat, v_hat, h = bdf2_start(last, np.ones((1, 3)), np.ones((1, 3)), 0.1)
-    >>> x_hat[0, 0], round(h, 6)  # (4 * 1 - 0) / 3 and 2/3 of the step
+    >>> float(x_hat[0, 0]), round(h, 6)  # (4 * 1 - 0) / 3 and 2/3 of the step
     (1.3333333333333333, 0.066667)
     """
     w = dt / last.dt

@@ -46,7 +46,12 @@ class FastMassSpring(Integrator):
     0.70 of the plain iteration's distance from the converged step, and six
     are closer than ten plain ones. An estimate above the true contraction
     would make the iterates oscillate; 0.95 is below it. ``rho = 0`` is the
-    plain iteration.
+    plain iteration. Where the plain iteration contracts far faster than
+    ``rho`` (a few points, or steps far below a frame), the accelerated one
+    still converges only about as fast as ``rho`` says: on two bodies and a
+    spring at 0.6 to 5 ms steps, ten iterations leave ``fast_bdf2`` 1 mm
+    from its answer where ``rho = 0`` leaves 6 um to 0.4 mm. There, take
+    ``rho = 0`` or more iterations.
 
     Spring dashpots are not modelled by the method (only air damping, gravity,
     wind and other non-spring forces, taken explicitly in ``y``); pinned points
