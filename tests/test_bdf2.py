@@ -145,3 +145,17 @@ def test_fast_bdf2_refuses_fewer_than_ten_iterations():
     with pytest.raises(InputError, match="at least 10 iterations a step, got 6"):
         Simulation(scene.with_overrides({"solver.iterations": 6}))
     Simulation(scene.with_overrides({"solver.iterations": 10})).advance(0.1)
+
+
+def test_a_checkpoint_with_a_damaged_history_is_refused(tmp_path):
+    from pvcloth import CheckpointError, load_checkpoint, save_checkpoint
+
+    sim = Simulation(hanging(6), integrator="bdf2", dt=1 / 240, stability="ignore")
+    sim.advance(2 / 240)
+    path = save_checkpoint(sim, tmp_path / "run.npz")
+    with np.load(path) as archive:
+        data = {key: archive[key] for key in archive.files}
+    data["integrator_history_time"] = np.array([0.0, sim.time])  # a step of 0 s
+    np.savez(path, **data)
+    with pytest.raises(CheckpointError, match=r"history.*step > 0 s"):
+        load_checkpoint(path)

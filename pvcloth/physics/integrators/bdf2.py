@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from pvcloth.errors import InputError
 from pvcloth.physics.integrators.backward_euler import BackwardEuler
 from pvcloth.physics.integrators.base import drift_error, register
 from pvcloth.physics.state import Control, State
@@ -130,15 +131,48 @@ class History:
         }
 
     def set_state(self, state: dict[str, np.ndarray]) -> None:
+        """Restore what :meth:`get_state` gave; a history that cannot be one
+        (a damaged checkpoint's) is refused with what is wrong."""
         self.clear()
-        if "history_x" in state:
-            dt, end = (float(value) for value in state["history_time"])
-            x, v = (np.array(state[f"history_{key}"], float).reshape(-1, 3) for key in "xv")
-            self.pending = Step(x, v, dt, end)
+        if "history_x" not in state:
+            return
+        x, v = (np.array(state.get(f"history_{key}", ()), float) for key in "xv")
+        times = np.array(state.get("history_time", ()), float)
+        if not (
+            x.size == v.size > 0
+            and x.size % 3 == 0
+            and times.shape == (2,)
+            and np.isfinite(times).all()
+            and times[0] > 0
+            and np.isfinite(x).all()
+            and np.isfinite(v).all()
+        ):
+            raise InputError(
+                "history",
+                "expected finite positions and velocities of one shape and a step > 0 s "
+                f"(history_time = {times.tolist()})",
+            )
+        self.pending = Step(x.reshape(-1, 3), v.reshape(-1, 3), float(times[0]), float(times[1]))
+
+
+class KeepsLastStep:
+    """What the two BDF2 integrators share: the last step, kept in
+    :attr:`history`, saved in checkpoints and dropped on a restart."""
+
+    history: History
+
+    def restart(self) -> None:
+        self.history.clear()
+
+    def get_state(self) -> dict[str, np.ndarray]:
+        return self.history.get_state()
+
+    def set_state(self, state: dict[str, np.ndarray]) -> None:
+        self.history.set_state(state)
 
 
 @register
-class BDF2(BackwardEuler):
+class BDF2(KeepsLastStep, BackwardEuler):
     """BDF2, the second-order backward differentiation formula, by Newton to
     the same residual as :class:`~pvcloth.physics.integrators.backward_euler.BackwardEuler`.
 
@@ -181,9 +215,6 @@ class BDF2(BackwardEuler):
         #: Whether the last step was the backward Euler start-up.
         self.started_up = False
 
-    def restart(self) -> None:
-        self.history.clear()
-
     def step(
         self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
@@ -202,9 +233,3 @@ class BDF2(BackwardEuler):
         self.error = drift_error(dt, v, v_new) if last is None else bdf2_error(last, v, v_new, dt)
         self.history.after(state, dt)
         return State(end, v_new, state.t + dt)
-
-    def get_state(self) -> dict[str, np.ndarray]:
-        return self.history.get_state()
-
-    def set_state(self, state: dict[str, np.ndarray]) -> None:
-        self.history.set_state(state)

@@ -9,7 +9,7 @@ import numpy as np
 
 from pvcloth.errors import InputError
 from pvcloth.physics.integrators.base import register
-from pvcloth.physics.integrators.bdf2 import History, bdf2_error, bdf2_start
+from pvcloth.physics.integrators.bdf2 import History, KeepsLastStep, bdf2_error, bdf2_start
 from pvcloth.physics.integrators.fast_mass_spring import FastMassSpring
 from pvcloth.physics.state import Control, State
 
@@ -22,7 +22,7 @@ MIN_ITERATIONS = 10
 
 
 @register
-class FastBDF2(FastMassSpring):
+class FastBDF2(KeepsLastStep, FastMassSpring):
     """BDF2 (:class:`~pvcloth.physics.integrators.bdf2.BDF2`) solved as
     ``fast_mass_spring`` solves backward Euler: local/global iterations,
     accelerated by Chebyshev's method, on one factorised matrix.
@@ -37,8 +37,8 @@ class FastBDF2(FastMassSpring):
     constant step), second order like the rest. The springs' dashpots are
     left out, as ``fast_mass_spring`` leaves them out (their share of the
     error is measured in ``benchmarks/results/frame_step.md``). The first
-    step, and the first after
-    a reset or an edit of the state, is ``fast_mass_spring``'s. Stopped
+    step, and the first after a reset or an edit of the state, is
+    ``fast_mass_spring``'s. Stopped
     after :attr:`iterations`, the step is not BDF2's answer: its distance
     from :class:`~pvcloth.physics.integrators.bdf2.BDF2` at the same step
     is the solver's share of its error, the time discretisation's being
@@ -47,10 +47,11 @@ class FastBDF2(FastMassSpring):
     It needs :data:`MIN_ITERATIONS` iterations a step. Stopped earlier,
     the solver's error feeds BDF2's recurrence, which takes the velocity
     from positions over two thirds of a step and builds on two steps: on
-    cotton at 32x32 points and 1/60 s steps six iterations end 55 cm from
-    the reference after 1 s (ten: 5 cm), and on a cloth 100 times lighter
-    than cotton five iterations multiplied the energy by 3e5 in 10 s
-    (``python benchmarks/frame_step.py --stability``).
+    cotton at 32x32 points and 1/60 s steps, five and six iterations
+    multiplied the energy by 170 and 160 within 10 s, and on that cloth a
+    hundred times lighter and undamped by 16,000 and 11,000; eight and more
+    kept it within 2 % of its start (``python benchmarks/frame_step.py
+    --stability``). Ten leaves a margin over the eight measured stable.
 
     Parameters
     ----------
@@ -77,9 +78,6 @@ class FastBDF2(FastMassSpring):
         #: Whether the last step was the backward Euler start-up.
         self.started_up = False
 
-    def restart(self) -> None:
-        self.history.clear()
-
     def step(
         self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
@@ -102,9 +100,3 @@ class FastBDF2(FastMassSpring):
         self.error = bdf2_error(last, v, v_new, dt)
         self.history.after(state, dt)
         return State(end, v_new, state.t + dt)
-
-    def get_state(self) -> dict[str, np.ndarray]:
-        return self.history.get_state()
-
-    def set_state(self, state: dict[str, np.ndarray]) -> None:
-        self.history.set_state(state)
