@@ -11,7 +11,7 @@ one method after another in one process. ``NAME:K`` runs ``NAME`` with
 For each: the RMS distance of the points from a reference at 0.5 s and at
 1 s; the total energy (kinetic, gravity's and the springs') at 1 s; the
 median wall time per 1/60 s frame (everything the simulation does) and the
-real-time factor over the whole second. The reference is RK4 at symplectic
+real-time factor (1/60 s over that median). The reference is RK4 at symplectic
 Euler's automatic step (written independently of the implicit solvers; its
 distance from RK4 at half that step is printed under the table). For the
 methods solved by a fixed count of iterations the distance from the method

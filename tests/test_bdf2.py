@@ -92,8 +92,7 @@ def test_a_step_taken_again_shorter_keeps_its_history():
     again = method.step(sim.model, state, sim.control, 1 / 480)
     assert not method.started_up
     fresh = BDF2()
-    fresh.set_state(sim.integrator.get_state())  # the accepted step taken last...
-    fresh.history.pending = method.history.current  # ...is the one both start from
+    fresh.history.pending = method.history.current  # the step both start from
     alone = fresh.step(sim.model, state, sim.control, 1 / 480)
     np.testing.assert_array_equal(again.x, alone.x)
 
@@ -159,3 +158,37 @@ def test_a_checkpoint_with_a_damaged_history_is_refused(tmp_path):
     np.savez(path, **data)
     with pytest.raises(CheckpointError, match=r"history.*step > 0 s"):
         load_checkpoint(path)
+
+
+def test_a_step_far_longer_than_the_last_starts_again():
+    """Variable-step BDF2 is zero-stable only for step ratios below
+    1 + sqrt(2): a step 2.4 times the last or longer is taken as a backward
+    Euler start-up, a shorter one builds on the history."""
+    sim = Simulation(hanging(), integrator="bdf2", dt=1 / 960, stability="ignore")
+    for _ in range(3):
+        sim.step()
+    method = sim.integrator
+    state = State(sim.positions.copy(), sim.velocities.copy(), sim.time)
+    method.step(sim.model, state, sim.control, 2.5 / 960)
+    assert method.started_up
+    method.step(sim.model, state, sim.control, 2.3 / 960)
+    assert not method.started_up
+
+
+def test_the_estimate_at_a_changed_step_is_the_step_s_own_error():
+    """As test_the_estimate_is_the_step_s_own_error, with the step half the
+    last one (the retry after a rejection): the constant is 3/8, not 2/9."""
+    h = 2e-3
+    scene = hanging()
+    reference = Simulation(scene, integrator="rk4", dt=h / 400, stability="ignore")
+    reference.advance(0.2 - h)
+    before = State(reference.positions.copy(), reference.velocities.copy(), reference.time)
+    reference.advance(h)
+    start = State(reference.positions.copy(), reference.velocities.copy(), reference.time)
+    reference.advance(h / 2)
+    method = BDF2()
+    method.history.pending = Step(before.x, before.v, h, start.t)
+    after = method.step(reference.model, start, reference.control, h / 2)
+    assert not method.started_up
+    true_error = float(np.linalg.norm(after.x - reference.positions, axis=1).max())
+    assert 0.7 * true_error < method.error < 1.3 * true_error, (method.error, true_error)

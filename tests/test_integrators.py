@@ -66,8 +66,8 @@ def oscillator_error(integrator, steps, duration=0.5):
     The methods that iterate run 50 iterations: the order is their time
     discretisation's. At their default 10 the solver's error can dominate:
     on two bodies the plain local/global iteration contracts far faster than
-    the 0.95 Chebyshev assumes, and ``fast_bdf2``'s error stalls at 1 mm
-    (see :class:`~pvcloth.physics.integrators.fast_mass_spring.FastMassSpring`)."""
+    the 0.95 Chebyshev assumes, and ``fast_bdf2``'s error stops falling with
+    the step (see :class:`~pvcloth.physics.integrators.fast_mass_spring.FastMassSpring`)."""
     model, k = two_body()
     mu = 1.0 * 0.5 / 1.5
     omega = math.sqrt(k / mu)

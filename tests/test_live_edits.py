@@ -79,6 +79,18 @@ def test_a_refused_edit_changes_nothing():
     with pytest.raises(InputError, match="family added or removed"):
         sim.update({"springs.bending": None})
     assert (sim.scene, sim.dt, sim.integrator) == before[:3]
+    # an integrator that refuses its settings, with a stiffness change beside it
+    stiffness = sim.model.spring_table().stiffness.copy()
+    with pytest.raises(InputError, match="at least 10 iterations"):
+        sim.update(
+            {
+                "solver.integrator": "fast_bdf2",
+                "solver.iterations": 6,
+                "springs.structural.stiffness": 50.0,
+            }
+        )
+    assert (sim.scene, sim.dt, sim.integrator) == before[:3]
+    np.testing.assert_array_equal(sim.model.spring_table().stiffness, stiffness)
 
 
 def test_control_derived_arrays_cannot_go_stale():

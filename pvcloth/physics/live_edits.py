@@ -88,10 +88,13 @@ class LiveEdits:
         policy = choice("stability", policy, STABILITY_POLICIES, error=InputError)
         scene = self._resolve_auto(scene)
         before = (self.scene, self.integrator, self.dt)
-        self.model.apply(scene)
         solver, was = scene.solver, self.scene.solver
+        integrator = self.integrator
         if (solver.method, solver.iterations) != (self.integrator.name, was.iterations):
-            self.integrator = get_integrator(solver.method, solver.iterations)
+            # made first: one that refuses its settings leaves the run as it was
+            integrator = get_integrator(solver.method, solver.iterations)
+        self.model.apply(scene)
+        self.integrator = integrator
         # The stable step depends on the springs, air damping and the
         # integrator, not on wind; gravity sets the contact step.
         step_depends = ("springs", "air_damping", "solver")

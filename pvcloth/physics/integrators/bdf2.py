@@ -63,11 +63,13 @@ def bdf2_start(last: Step, x: np.ndarray, v: np.ndarray, dt: float):
 
 
 def bdf2_error(last: Step, v: np.ndarray, v_new: np.ndarray, dt: float) -> float:
-    """The error estimate of a BDF2 step (m): BDF2's local error ``2/9 dt^3
+    """The error estimate of a BDF2 step (m): BDF2's local error ``C dt^3
     x'''`` with ``x'''`` from the second divided difference of the last
     three velocities (``last.v``, ``v`` and ``v_new``, m/s, shape (N, 3));
-    the largest over the points. It scales as ``dt^3`` (second order) and
-    comes from the one solve.
+    the largest over the points. ``C = (1 + w)^2 / (6 w (1 + 2 w))`` for the
+    ratio ``w = dt / last.dt`` of the two steps, 2/9 at a constant step
+    (Hairer, Norsett and Wanner III.5). It scales as ``dt^3`` (second order)
+    and comes from the one solve.
 
     Examples
     --------
@@ -79,7 +81,15 @@ def bdf2_error(last: Step, v: np.ndarray, v_new: np.ndarray, dt: float) -> float
     0.000769800
     """
     jerk = 2 * ((v_new - v) / dt - (v - last.v) / last.dt) / (dt + last.dt)  # (N, 3) m/s^3
-    return 2 / 9 * dt**3 * float(np.sqrt(np.einsum("ij,ij->i", jerk, jerk).max(initial=0.0)))
+    w = dt / last.dt
+    constant = (1 + w) ** 2 / (6 * w * (1 + 2 * w))
+    return constant * dt**3 * float(np.sqrt(np.einsum("ij,ij->i", jerk, jerk).max(initial=0.0)))
+
+
+#: The longest step BDF2 takes on its history, as a multiple of the last
+#: one: below 1 + sqrt(2) = 2.414, where its variable-step form stops being
+#: zero-stable (Grigorieff 1983); a longer one starts again with backward Euler.
+MAX_RATIO = 2.4
 
 
 def _ends_at(step: Step, t: float) -> bool:
@@ -101,14 +111,20 @@ class History:
         self.pending: Step | None = None
         self.current: Step | None = None
 
-    def before(self, state: State) -> Step | None:
-        """The step that led to ``state``, or ``None`` (start again)."""
+    def before(self, state: State, dt: float) -> Step | None:
+        """The step that led to ``state``, or ``None`` (start again), for a
+        next step of ``dt``: also ``None`` when ``dt`` is more than
+        :data:`MAX_RATIO` times that step's length (variable-step BDF2 is
+        zero-stable only below ``1 + sqrt(2)``; after a step cut short at a
+        frame's end the next is often far longer)."""
         if self.pending is not None and _ends_at(self.pending, state.t):
             self.current, self.pending = self.pending, None
         if self.current is not None and (
             not _ends_at(self.current, state.t) or self.current.x.shape != state.x.shape
         ):
             self.current = None
+        if self.current is not None and dt > MAX_RATIO * self.current.dt:
+            return None  # kept: a shorter retry from this state may use it
         return self.current
 
     def after(self, state: State, dt: float) -> None:
@@ -183,7 +199,11 @@ class BDF2(KeepsLastStep, BackwardEuler):
     same incremental potential and the same Newton solve take it, with
     every force implicit: springs, their dashpots, plate bending, air
     damping, gravity and the wind. The dashpots act on the change of each
-    spring's length from ``x_hat``'s, like backward Euler's from ``x``'s.
+    spring's length from ``x_hat``'s, like backward Euler's from ``x``'s:
+    the length of the combined start is not the combination of the two
+    lengths where a spring turns, so their rate is first order there (the
+    dashpots move the 64x64 cotton cloth by 0.48 cm in its first second,
+    ``benchmarks/results/frame_step.md``).
 
     Like backward Euler it is A-stable and L-stable (it damps the stiffest
     modes of a cloth to nothing at any step), but its error is second
@@ -219,7 +239,7 @@ class BDF2(KeepsLastStep, BackwardEuler):
         self, model: Model, state: State, control: Control, dt: float, out: State | None = None
     ) -> State:
         x, v = state.x, state.v
-        last = self.history.before(state)
+        last = self.history.before(state, dt)
         if last is None:
             x_hat, v_hat, h = x, v, dt
         else:
