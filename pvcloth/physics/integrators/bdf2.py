@@ -218,7 +218,7 @@ class BDF2(KeepsLastStep, BackwardEuler):
     :func:`~pvcloth.physics.integrators.base.drift_error`).
 
     Several factorisations per step (seconds at 64x64): like backward
-    Euler, the reference its fast twins are measured against.
+    Euler, the reference its fast twin is measured against.
 
     Parameters
     ----------
