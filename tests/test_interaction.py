@@ -512,7 +512,7 @@ def test_the_same_checks_in_a_real_window_under_xvfb():
         timeout=280,  # inside the serial tier's 300 s limit, so this names the cause
     )
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-2000:]
-    assert "21 passed, 1 skipped" in result.stdout  # all but this test itself
+    assert "22 passed, 1 skipped" in result.stdout  # all but this test itself
 
 
 def test_w_toggles_wind_and_the_slider_sets_its_speed_and_no_default_key_acts(app):
