@@ -36,6 +36,7 @@ RUNS = {
     "fabric_speed.py": ([], "fabric_speed.md"),
     "frame_step.py": ([], "frame_step.md"),
     "frame_step.py --stability": (["--stability"], "frame_step_stability.md"),
+    "frame_step.py --convergence": (["--convergence"], "frame_step_convergence.md"),
     "finite_check.py": ([], "finite_check.md"),
     "fresh_clone.py": (["--quick"], "fresh_clone.md"),
     "fuzz.py": (["--examples", "3"], "fuzz.md"),
