@@ -4,6 +4,7 @@ To add one: write a subclass of :class:`Integrator` in its own module,
 decorate it with :func:`register` and import the module here.
 """
 
+from pvcloth.errors import InputError
 from pvcloth.physics.integrators import (  # noqa: F401  (importing registers them)
     backward_euler,
     bdf2,
@@ -25,6 +26,19 @@ __all__ = ["INTEGRATORS", "Integrator", "get_integrator", "register"]
 def get_integrator(name: str, iterations: int | None = None) -> Integrator:
     """A new integrator instance by registry name, e.g. ``"symplectic_euler"``;
     ``iterations`` per step for those that iterate (``None``: their default;
-    the others do not use it)."""
+    the others do not use it). Fewer than the integrator's
+    ``min_iterations`` are refused, with its reason.
+
+    >>> get_integrator("fast_bdf2", iterations=20).iterations
+    20
+    """
     cls = INTEGRATORS[choice("integrator", name, sorted(INTEGRATORS))]
-    return cls(iterations=iterations) if cls.iterative and iterations is not None else cls()
+    if not cls.iterative or iterations is None:
+        return cls()
+    if iterations < cls.min_iterations:
+        raise InputError(
+            "solver.iterations",
+            f"{cls.name} needs at least {cls.min_iterations} iterations a step, got "
+            f"{iterations}: {cls.too_few_iterations}",
+        )
+    return cls(iterations=iterations)

@@ -72,7 +72,11 @@ class Integrator(ABC):
         ``None`` otherwise.
     min_iterations : int
         The fewest iterations a step of an ``iterative`` one may take
-        (fewer are refused when it is made).
+        (:func:`~pvcloth.physics.integrators.get_integrator` refuses fewer,
+        saying :attr:`too_few_iterations`; the window's ``i`` key passes
+        over it when a scene gives fewer).
+    too_few_iterations : str
+        Why fewer than :attr:`min_iterations` are refused.
     uses_blas : bool
         Whether its step calls BLAS (linear solves, long dot products): the
         simulation then holds BLAS to one thread around it
@@ -85,6 +89,7 @@ class Integrator(ABC):
     description: str = ""
     iterative: bool = False
     min_iterations: int = 1
+    too_few_iterations: str = ""
     converges_to: str | None = None
     interactive: bool = True
     uses_blas: bool = False

@@ -7,7 +7,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pvcloth.errors import InputError
 from pvcloth.physics.integrators.base import register
 from pvcloth.physics.integrators.bdf2 import History, KeepsLastStep, bdf2_error, bdf2_start
 from pvcloth.physics.integrators.fast_mass_spring import FastMassSpring
@@ -56,7 +55,9 @@ class FastBDF2(KeepsLastStep, FastMassSpring):
     Parameters
     ----------
     iterations : int
-        Local/global iterations per step, at least :data:`MIN_ITERATIONS`.
+        Local/global iterations per step, at least :data:`MIN_ITERATIONS`
+        (:func:`~pvcloth.physics.integrators.get_integrator` refuses fewer;
+        a study that measures fewer sets :attr:`iterations` after).
     rho : float
         Chebyshev's estimate of the plain iteration's contraction (0 <= rho < 1).
     """
@@ -65,14 +66,11 @@ class FastBDF2(KeepsLastStep, FastMassSpring):
     description = "BDF2 by local/global iterations, prefactorised; second order when converged"
     converges_to = "bdf2"
     min_iterations = MIN_ITERATIONS
+    too_few_iterations = (
+        "fewer were measured to gain energy without bound (fast_mass_spring takes fewer)"
+    )
 
     def __init__(self, iterations: int = MIN_ITERATIONS, rho: float = 0.95):
-        if iterations < MIN_ITERATIONS:
-            raise InputError(
-                "solver.iterations",
-                f"fast_bdf2 needs at least {MIN_ITERATIONS} iterations a step, got {iterations}: "
-                "fewer were measured to gain energy without bound (fast_mass_spring takes fewer)",
-            )
         super().__init__(iterations, rho)
         self.history = History()
         #: Whether the last step was the backward Euler start-up.
