@@ -5,8 +5,8 @@ on cotton falling from flat, against its cost.
 (``data/scenes/cotton.toml``: 1 m square, 2112 N/m, 0.22 kg/m^2, plate
 bending, air damping 1/s, held by two corners, starting flat) from rest,
 one method after another in one process. ``NAME:K`` runs ``NAME`` with
-``solver.iterations = K``; ``NAME@S`` takes ``S`` steps per 1/60 s frame
-(one by default).
+``solver.iterations = K``; ``NAME+lbfgs`` with ``solver.accelerator =
+"lbfgs"``; ``NAME@S`` takes ``S`` steps per 1/60 s frame (one by default).
 
 For each: the RMS distance of the points from a reference at 0.5 s and at
 1 s; the total energy (kinetic, gravity's and the springs') at 1 s; the
@@ -64,24 +64,41 @@ METHODS = (
     "fast_bdf2:20",
     "fast_bdf2:50",
     "fast_bdf2:200",
+    "fast_bdf2+lbfgs:5",
+    "fast_bdf2+lbfgs:10",
+    "fast_bdf2+lbfgs:20",
+    "fast_bdf2+lbfgs:50",
     "backward_euler",
     "bdf2",
     "bdf2@2",
 )
 
 
-def parse(method: str) -> tuple[str, int | None, int]:
-    """``"fast_bdf2:20@2"`` -> ``("fast_bdf2", 20, 2)``."""
+def parse(method: str) -> tuple[str, int | None, int, str | None]:
+    """``"fast_bdf2+lbfgs:20@2"`` -> ``("fast_bdf2", 20, 2, "lbfgs")``: the
+    integrator, its iterations, steps per frame and ``solver.accelerator``."""
     head, _, per_frame = method.partition("@")
-    name, _, iterations = head.partition(":")
-    return name, int(iterations) if iterations else None, int(per_frame or 1)
+    head, _, iterations = head.partition(":")
+    name, _, accelerator = head.partition("+")
+    return (
+        name,
+        int(iterations) if iterations else None,
+        int(per_frame or 1),
+        accelerator or None,
+    )
+
+
+def configured(scene, method: str):
+    """``scene`` with ``method``'s iterations and accelerator, and its
+    integrator's name and steps per frame."""
+    name, iterations, per_frame, accelerator = parse(method)
+    changes = {"solver.iterations": iterations, "solver.accelerator": accelerator}
+    return scene.with_overrides({k: v for k, v in changes.items() if v}), name, per_frame
 
 
 def run(scene, method: str, frames: int) -> dict:
     """Positions at each check, energy at the end, wall time per frame."""
-    name, iterations, per_frame = parse(method)
-    if iterations:
-        scene = scene.with_overrides({"solver.iterations": iterations})
+    scene, name, per_frame = configured(scene, method)
     sim = pvcloth.Simulation(scene, integrator=name, dt=FRAME / per_frame, stability="ignore")
     positions, walls, failure = {}, [], None
     try:
@@ -131,6 +148,10 @@ STABILITY = (
     "fast_bdf2:8",
     "fast_bdf2:10",
     "fast_bdf2:20",
+    "fast_mass_spring+lbfgs:2",
+    "fast_mass_spring+lbfgs:3",
+    "fast_bdf2+lbfgs:3",
+    "fast_bdf2+lbfgs:5",
     "backward_euler",
     "bdf2",
 )
@@ -146,8 +167,13 @@ def stability(args) -> list[str]:
     rows = []
     for label, scene in (("cotton", cotton), ("light, undamped", light)):
         for method in args.methods:
-            name, iterations, _ = parse(method)
-            sim = pvcloth.Simulation(scene, integrator=name, dt=FRAME, stability="ignore")
+            name, iterations, _, accelerator = parse(method)
+            sim = pvcloth.Simulation(
+                scene.with_overrides({"solver.accelerator": accelerator}),
+                integrator=name,
+                dt=FRAME,
+                stability="ignore",
+            )
             if iterations:
                 sim.integrator.iterations = iterations  # below fast_bdf2's minimum too
             energies, outcome = [energy(sim)], ""
@@ -176,7 +202,8 @@ def stability(args) -> list[str]:
         "cloth a hundred times lighter with neither dashpots nor air damping. Energy = "
         "kinetic + gravity + springs + plate, over its initial value (gravity's, the cloth "
         "being flat and at rest): the physics only loses energy, so a largest value far "
-        "above 1 is energy the method made. `NAME:K` = K local/global iterations per step.",
+        "above 1 is energy the method made. `NAME:K` = K local/global iterations per step, "
+        "`+lbfgs` = L-BFGS in place of Chebyshev's acceleration (`solver.accelerator`).",
         "",
         "| cloth | method | largest energy | energy at the end | fastest point at the end "
         "(m/s) | ran (s) | stopped by |",
@@ -289,8 +316,8 @@ def main() -> None:
         truths.append((kept, energy(truth)))
         print({"reference dt": dt, "energy": truths[-1][1]}, flush=True)
     (truth, truth_energy), (half, _), (free, _) = truths
-    for name in dict.fromkeys(parse(method)[0] for method in args.methods):
-        run(scene, name, 2)  # compiles its kernels before any clock runs
+    for method in args.methods:
+        run(scene, method, 2)  # compiles its kernels before any clock runs
     results = {}
     for method in args.methods:
         results[method] = run(scene, method, frames)
@@ -314,7 +341,8 @@ def main() -> None:
         f"plate at 1 s (RK4: {truth_energy:.4f} J); ms = median wall time per 1/60 s frame; "
         "real time = 1/60 s over that median (2 = twice as fast as real time; each "
         "integrator ran two untimed frames first, which compile its kernels). `NAME:K` = "
-        "K local/global iterations per step, `@2` = two steps per frame.",
+        "K local/global iterations per step, `+lbfgs` = L-BFGS in place of Chebyshev's "
+        "acceleration (`solver.accelerator`), `@2` = two steps per frame.",
         "",
         "| method | dt (s) | error (cm) | solver (cm) | energy at 1 s (J) | ms per 1/60 s "
         "| real time |",

@@ -459,9 +459,10 @@ if numba is not None:
     def _spring_projection(x, a, b, rest, weight, out):
         """Liu et al.'s local step, summed onto the points: every spring's
         ``weight * rest * u`` (``u`` the unit vector from end b to end a)
-        added at end a and taken from end b. Serial: a scatter over springs,
-        a few nanoseconds each."""
+        added at end a and taken from end b; returns ``sum(weight * rest *
+        length)``. Serial: a scatter over springs, a few nanoseconds each."""
         out[:] = 0.0
+        total = 0.0
         for s in range(a.size):
             p, q = a[s], b[s]
             dx = x[p, 0] - x[q, 0]
@@ -469,12 +470,14 @@ if numba is not None:
             dz = x[p, 2] - x[q, 2]
             length = np.sqrt(dx * dx + dy * dy + dz * dz)
             scale = weight[s] * rest[s] / max(length, 1e-12)
+            total += weight[s] * rest[s] * length
             out[p, 0] += scale * dx
             out[p, 1] += scale * dy
             out[p, 2] += scale * dz
             out[q, 0] -= scale * dx
             out[q, 1] -= scale * dy
             out[q, 2] -= scale * dz
+        return total
 
     def _subtract_product(indptr, indices, data, x, f):
         """``f -= A x`` for a CSR matrix ``A`` ``(N, N)`` (``indptr``,
@@ -500,7 +503,12 @@ THREADED_ROWS = 64
 def _pick(builds, rows: int):
     # numba's thread count is per calling thread: a thread that asked for
     # one (the window's physics, see use_threads) gets the serial build.
-    kernel = builds[rows >= THREADED_ROWS and numba.get_num_threads() > 1]
+    return warm(builds[rows >= THREADED_ROWS and numba.get_num_threads() > 1])
+
+
+def warm(kernel):
+    """``kernel`` itself once it has run, else its first call wrapped by
+    :class:`_Warming` (signals held while it compiles or loads)."""
     return kernel if kernel in _WARM else _Warming(kernel)
 
 
@@ -607,21 +615,22 @@ def kick_drift(x, v, f, inv_mass, dt: float, x_out, v_out, shape) -> tuple[float
     return float(np.sqrt(fastest)), math.isfinite(checksum)
 
 
-def spring_projection(x, a, b, rest, weight, out) -> None:
+def spring_projection(x, a, b, rest, weight, out) -> float:
     """Compiled :func:`spring_projection_numpy` (same sums, another order)."""
-    kernel = _spring_projection
-    if kernel not in _WARM:
-        kernel = _Warming(kernel)
-    kernel(x, a, b, rest, weight, out)
+    return float(warm(_spring_projection)(x, a, b, rest, weight, out))
 
 
-def spring_projection_numpy(x, a, b, rest, weight, out) -> None:
+def spring_projection_numpy(x, a, b, rest, weight, out) -> float:
     """Into ``out`` (``(N, 3)``): for every spring from a to b (``a``, ``b``
     point indices, ``rest`` lengths in m), ``weight * rest * (x_a - x_b) /
-    |x_a - x_b|`` added at a and subtracted at b. The NumPy reference."""
+    |x_a - x_b|`` added at a and subtracted at b. Returns ``sum(weight *
+    rest * |x_a - x_b|)`` (the part of the springs' energy, times the
+    weights, that is not quadratic in ``x``). The NumPy reference."""
     d = x[a] - x[b]
     length = np.sqrt(np.einsum("ij,ij->i", d, d))
+    total = float(np.dot(weight * rest, length))
     d *= (weight * rest / np.maximum(length, 1e-12))[:, None]
     out[:] = 0.0
     for k in range(3):
         out[:, k] = np.bincount(a, d[:, k], out.shape[0]) - np.bincount(b, d[:, k], out.shape[0])
+    return total

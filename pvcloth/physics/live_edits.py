@@ -90,9 +90,13 @@ class LiveEdits:
         before = (self.scene, self.integrator, self.dt)
         solver, was = scene.solver, self.scene.solver
         integrator = self.integrator
-        if (solver.method, solver.iterations) != (self.integrator.name, was.iterations):
+        if (solver.method, solver.iterations, solver.accelerator) != (
+            self.integrator.name,
+            was.iterations,
+            was.accelerator,
+        ):
             # made first: one that refuses its settings leaves the run as it was
-            integrator = get_integrator(solver.method, solver.iterations)
+            integrator = get_integrator(solver.method, solver.iterations, solver.accelerator)
         self.model.apply(scene)
         self.integrator = integrator
         # The stable step depends on the springs, air damping and the

@@ -160,14 +160,16 @@ class Model:
             self._table = SpringTable.join([family.table() for family in self.springs])
         return self._table
 
-    def spring_projection(self, x: np.ndarray, weight: np.ndarray, out: np.ndarray) -> None:
+    def spring_projection(self, x: np.ndarray, weight: np.ndarray, out: np.ndarray) -> float:
         """Liu et al.'s local step summed onto the points, into ``out``
         ``(N, 3)``: every spring of :meth:`spring_table` projected to its rest
         length along its current direction at ``x`` (m), times ``weight``
-        (one per spring), added at its end a and taken from its end b."""
+        (one per spring), added at its end a and taken from its end b.
+        Returns ``sum(weight * rest * length)`` over the springs (the term of
+        their weighted energy that is not quadratic in ``x``)."""
         table = self.spring_table()
         project = spring_projection if self._plan is not None else spring_projection_numpy
-        project(x, table.a, table.b, table.rest, weight, out)
+        return project(x, table.a, table.b, table.rest, weight, out)
 
     @property
     def compiled(self) -> bool:

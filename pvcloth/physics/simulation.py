@@ -138,7 +138,8 @@ class Simulation(Clocks, LiveEdits, Pins):
         #: What each step goes through after the integrator (obstacles, pins,
         #: self-collision, the divergence guard): only what the scene needs.
         self.pipeline = build_pipeline(self.model)
-        self.integrator = get_integrator(scene.solver.method, scene.solver.iterations)
+        solver = scene.solver
+        self.integrator = get_integrator(solver.method, solver.iterations, solver.accelerator)
         self.reset()
         #: Chooses every step when the scene gives ``solver.tolerance``
         #: (:mod:`pvcloth.physics.adaptive`); ``None`` for fixed steps.

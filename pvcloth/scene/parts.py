@@ -233,6 +233,11 @@ INTEGRATOR_NAMES = (
     "symplectic_euler",
     "verlet",
 )
+#: How ``fast_mass_spring`` and ``fast_bdf2`` speed up their local/global
+#: iterations (``solver.accelerator``): Chebyshev's semi-iterative method
+#: (the default) or L-BFGS on the global matrix (see
+#: :class:`~pvcloth.physics.integrators.fast_mass_spring.FastMassSpring`).
+ACCELERATORS = ("chebyshev", "lbfgs")
 #: The integrators that measure their own error, so ``solver.tolerance`` can
 #: choose their steps (``embedded`` in :mod:`pvcloth.physics.integrators`;
 #: a test keeps the two equal, so the command line can say so without
@@ -273,6 +278,12 @@ class SolverSpec:
         default 10): more are closer to backward Euler, and cost more. The
         other integrators leave it unused (``backward_euler`` iterates to its
         residual tolerance).
+    accelerator : {"chebyshev", "lbfgs"}, optional
+        How ``fast_mass_spring`` and ``fast_bdf2`` speed up those
+        iterations (default ``"chebyshev"``): ``"lbfgs"`` costs more per
+        iteration and ends closer to the converged step for the same count,
+        and every iteration lowers the step's energy (the other integrators
+        leave it unused).
     tolerance : float, optional
         Position error in metres (1e-12 to 1) a second of simulation may
         add: the step is then chosen for every step from the integrator's
@@ -297,6 +308,8 @@ class SolverSpec:
     0.0001
     >>> SolverSpec("fast_mass_spring", iterations=6).iterations
     6
+    >>> SolverSpec("fast_bdf2", accelerator="lbfgs").accelerator
+    'lbfgs'
     >>> SolverSpec("auto", tolerance=1e-3, max_dt=0.01).max_dt
     0.01
     >>> SolverSpec(tolerance=1e-3).method  # a tolerance alone lets a probe choose
@@ -309,6 +322,7 @@ class SolverSpec:
     dt: float | None = None
     stability: str = "refuse"
     iterations: int | None = None
+    accelerator: str | None = None
     tolerance: float | None = None
     min_dt: float | None = None
     max_dt: float | None = None
@@ -341,6 +355,8 @@ class SolverSpec:
             _set(
                 self, "iterations", integer("iterations", self.iterations, minimum=1, maximum=10000)
             )
+        if self.accelerator is not None:
+            _set(self, "accelerator", choice("accelerator", self.accelerator, ACCELERATORS))
         if self.integrator is not None:
             _set(
                 self,

@@ -301,7 +301,8 @@ class Scene:
             (
                 "solver",
                 f"{solver.method}, dt {step}, stability {solver.stability}"
-                + (f", {solver.iterations} iterations" if solver.iterations else ""),
+                + (f", {solver.iterations} iterations" if solver.iterations else "")
+                + (f", {solver.accelerator} accelerator" if solver.accelerator else ""),
             ),
             ("gravity", f"{_vec(self.gravity)} m/s^2, air damping {self.air_damping:g} 1/s"),
             ("wind", wind),

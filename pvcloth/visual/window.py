@@ -500,7 +500,7 @@ class ClothApp:
                 for name, cls in INTEGRATORS.items()
                 if cls.interactive
                 and (cls.embedded or not adaptive)
-                and (iterations is None or iterations >= cls.min_iterations)
+                and (iterations is None or iterations >= cls.fewest_iterations(solver.accelerator))
             )
             current = self.sim.integrator.name
             at = names.index(current) + 1 if current in names else 0

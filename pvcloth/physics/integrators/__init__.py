@@ -23,22 +23,31 @@ from pvcloth.scene.validation import choice
 __all__ = ["INTEGRATORS", "Integrator", "get_integrator", "register"]
 
 
-def get_integrator(name: str, iterations: int | None = None) -> Integrator:
+def get_integrator(
+    name: str, iterations: int | None = None, accelerator: str | None = None
+) -> Integrator:
     """A new integrator instance by registry name, e.g. ``"symplectic_euler"``;
-    ``iterations`` per step for those that iterate (``None``: their default;
-    the others do not use it). Fewer than the integrator's
-    ``min_iterations`` are refused, with its reason.
+    ``iterations`` per step and their ``accelerator`` (one of
+    :data:`~pvcloth.scene.parts.ACCELERATORS`) for those that iterate
+    (``None``: their default; the others do not use them). Fewer than the
+    integrator's ``min_iterations`` are refused, with its reason.
 
     >>> get_integrator("fast_bdf2", iterations=20).iterations
     20
+    >>> get_integrator("fast_bdf2", accelerator="lbfgs").accelerator
+    'lbfgs'
     """
     cls = INTEGRATORS[choice("integrator", name, sorted(INTEGRATORS))]
-    if not cls.iterative or iterations is None:
+    if not cls.iterative:
         return cls()
-    if iterations < cls.min_iterations:
+    options = {} if accelerator is None else {"accelerator": accelerator}
+    if iterations is None:
+        return cls(**options)
+    fewest = cls.fewest_iterations(accelerator)
+    if iterations < fewest:
         raise InputError(
             "solver.iterations",
-            f"{cls.name} needs at least {cls.min_iterations} iterations a step, got "
+            f"{cls.name} needs at least {fewest} iterations a step, got "
             f"{iterations}: {cls.too_few_iterations}",
         )
-    return cls(iterations=iterations)
+    return cls(iterations=iterations, **options)

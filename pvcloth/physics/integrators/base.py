@@ -98,6 +98,13 @@ class Integrator(ABC):
     check: tuple[float, bool] | None = None
     _forces: np.ndarray | None = None  # reused (N, 3) force buffer, newtons
 
+    @classmethod
+    def fewest_iterations(cls, accelerator: str | None = None) -> int:
+        """The fewest iterations a step may take with ``accelerator`` (one
+        of :data:`~pvcloth.scene.parts.ACCELERATORS`, ``None`` for the
+        default): :attr:`min_iterations` unless a subclass says otherwise."""
+        return cls.min_iterations
+
     @staticmethod
     def acceleration(model: Model, control: Control, x: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Acceleration (m/s^2, shape (N, 3)) at positions ``x`` (m) and

@@ -12,7 +12,10 @@ import scipy.sparse as sp
 from cholespy import CholeskySolverD, MatrixType
 
 from pvcloth.physics.integrators.base import Integrator, drift_error, register
+from pvcloth.physics.lbfgs import Memory
 from pvcloth.physics.state import Control, State
+from pvcloth.scene.parts import ACCELERATORS
+from pvcloth.scene.validation import choice
 
 if TYPE_CHECKING:  # for annotations only: the model module imports no integrator
     from pvcloth.physics.model import Model
@@ -70,12 +73,30 @@ class FastMassSpring(Integrator):
     (:func:`~pvcloth.physics.integrators.base.drift_error`): it measures the
     time discretisation, not the iterations stopped early.
 
+    With ``accelerator="lbfgs"`` the iterations are L-BFGS steps on the
+    step's energy instead (Liu, Bouaziz and Kavan 2017, "Quasi-Newton
+    methods for real-time simulation of hyperelastic materials"): the
+    global matrix is the first estimate of the Hessian, so the first
+    iteration is a plain local/global one, and the last :attr:`memory`
+    moves refine it; an Armijo line search makes every iteration lower the
+    energy (tested against ``backward_euler``'s own potential), so, unlike
+    Chebyshev's, it cannot gain energy by stopping early. Each iteration
+    costs one solve and one pass over the springs, as a plain one does,
+    plus a few vector sums per remembered move. It stops early only where
+    the energy, in double precision, no longer shows a decrease (about a
+    micrometre from the answer). :attr:`residual` is the last iteration's
+    largest move of a point (m), either way.
+
     Parameters
     ----------
     iterations : int
         Local/global iterations per step (Liu et al. use about 10).
     rho : float
         Chebyshev's estimate of the plain iteration's contraction (0 <= rho < 1).
+    accelerator : {"chebyshev", "lbfgs"}
+        How the iterations are sped up (:data:`~pvcloth.scene.parts.ACCELERATORS`).
+    memory : int
+        Moves L-BFGS remembers.
     """
 
     name, order = "fast_mass_spring", 1  # registry key; global order of accuracy
@@ -86,15 +107,27 @@ class FastMassSpring(Integrator):
     embedded = True  # backward Euler against the trapezoidal rule (drift_error)
     steady_steps = True  # its factorisation depends on the step
 
-    def __init__(self, iterations: int = 10, rho: float = 0.95):
+    def __init__(
+        self,
+        iterations: int = 10,
+        rho: float = 0.95,
+        accelerator: str = "chebyshev",
+        memory: int = 5,
+    ):
         self.iterations = iterations
         self.rho = rho
+        self.accelerator = choice("accelerator", accelerator, ACCELERATORS)
+        self.memory = memory
+        #: The last iteration's largest move of a point (m): how far the
+        #: step stopped from its own answer, at the last iteration's pace.
+        self.residual = 0.0
         self._factors: dict[tuple, _Factor] = {}
         #: Error estimate of the last step (m): see :func:`drift_error`.
         self.error = 0.0
         #: Factorisations made so far (one per step length, pinned set and stiffness).
         self.factorisations = 0
         self._pull: np.ndarray | None = None  # (N, 3) buffers the iterations reuse
+        self._memory: Memory | None = None  # L-BFGS's pairs
 
     def stable_dt(self, model: Model, state: State, control: Control) -> float:
         return float("inf")  # the converged step is backward Euler's: A-stable
@@ -169,6 +202,19 @@ class FastMassSpring(Integrator):
         base[fixed] = pinned_next
         guess = y
         guess[fixed] = pinned_next
+        if self.accelerator == "lbfgs":
+            guess = self._lbfgs(model, factor, base, guess)
+        else:
+            guess = self._chebyshev(model, factor, base, guess)
+        if guess is not y:
+            y[...] = guess  # the result lives in the step's own array
+            guess = y
+        return guess
+
+    def _chebyshev(self, model: Model, factor: _Factor, base: np.ndarray, guess: np.ndarray):
+        """:attr:`iterations` local/global iterations from ``guess``,
+        accelerated by Chebyshev's method (plain with ``rho = 0``)."""
+        fixed, pinned_next = factor.fixed, base[factor.fixed]
         pull, rhs = self._pull, self._rhs
         previous, new = self._iterates
         rho2, omega = self.rho**2, 1.0
@@ -180,6 +226,8 @@ class FastMassSpring(Integrator):
             np.add(base, pull, out=rhs)
             rhs[fixed] = pinned_next
             factor.solver.solve(rhs, new)
+            if k == self.iterations - 1:  # the plain iteration's last move
+                self.residual = float(np.sqrt(((new - guess) ** 2).sum(axis=1).max()))
             # Chebyshev: x_k+1 = omega (x^_k+1 - x_k-1) + x_k-1, omega from
             # the recurrence of Chebyshev polynomials (omega = 1 at first).
             # Pinned rows stay exact: omega (p - p) + p = p.
@@ -190,14 +238,115 @@ class FastMassSpring(Integrator):
                 new += previous
             previous[...] = guess
             guess, new = new, guess
-        if guess is not y:
-            y[...] = guess  # the result lives in the step's own array
-            guess = y
         return guess
+
+    def _lbfgs(self, model: Model, factor: _Factor, base: np.ndarray, guess: np.ndarray):
+        """:attr:`iterations` quasi-Newton iterations from ``guess``: L-BFGS
+        on the step's energy with the global matrix as its first Hessian
+        (Liu, Bouaziz and Kavan 2017), an Armijo line search keeping every
+        iteration downhill.
+
+        Times ``h^2``, the step's energy is ``E(x) = x.A x / 2 - b.x -
+        sum(w L |x_a - x_b|)`` (``A`` the global matrix, ``b`` = ``base``,
+        ``w = h^2 k`` per spring of rest length ``L``), and its gradient
+        ``A x - b - p(x)`` with ``p`` the local step's pull. With no history
+        the direction ``A^-1 (b + p(x)) - x`` is one plain local/global
+        iteration; the history of the last :attr:`memory` moves and gradient
+        changes bends it towards Newton's. Each iteration costs one solve
+        and one pass over the springs, as a plain iteration does, and a few
+        vector sums per remembered move: ``A x`` is carried along (``A``
+        times each move is known from the solve), not multiplied out."""
+        fixed, solver = factor.fixed, factor.solver
+        n = guess.shape[0]
+        if self._memory is None or (self._memory.size, self._memory.moves.shape[1]) != (
+            self.memory,
+            3 * n,
+        ):
+            self._memory = Memory(self.memory, n)
+            self._lbfgs_buffers = tuple(np.empty((n, 3)) for _ in range(6))
+        memory = self._memory
+        memory.clear()
+        trial, product, trial_product, gradient, trial_gradient, direction = self._lbfgs_buffers
+        direction_product = self._iterates[0]
+        x = guess
+        np.copyto(product, (factor.matrix @ x))  # A x, carried along from here
+        pull, trial_pull = self._pull, self._rhs  # p(x) and p(trial)
+        stretched = self._gradient(model, factor, base, x, product, pull, gradient)
+        alpha = 0.0
+        for _ in range(self.iterations):
+            memory.direction(
+                gradient, solver.solve, fixed, direction, direction_product, model.compiled
+            )
+            slope = np.vdot(gradient, direction)
+            if not slope < 0.0:  # no way down left: converged to round-off
+                break
+            # Armijo backtracking from the full step, which is almost always
+            # taken. The energy's change is summed from differences (the
+            # quadratic part exactly: A d is known), as its value would
+            # round away the last iterations' changes.
+            linear = slope + np.vdot(direction, pull)  # d.(A x - b) on the free rows
+            curving = np.vdot(direction, direction_product)  # d.A d
+            alpha = 1.0
+            for _ in range(ARMIJO_TRIALS):
+                np.multiply(direction, alpha, out=trial)
+                trial += x
+                np.multiply(direction_product, alpha, out=trial_product)
+                trial_product += product
+                trial_stretched = self._gradient(
+                    model, factor, base, trial, trial_product, trial_pull, trial_gradient
+                )
+                change = alpha * linear + 0.5 * alpha**2 * curving
+                change -= trial_stretched - stretched
+                if change <= ARMIJO * alpha * slope:
+                    break
+                alpha *= 0.5
+            else:  # no decrease found: start the memory again, or stop
+                alpha = 0.0
+                if not memory.slots:
+                    break
+                memory.clear()
+                continue
+            memory.remember(x, trial, gradient, trial_gradient, product, trial_product)
+            x, trial = trial, x
+            product, trial_product = trial_product, product
+            gradient, trial_gradient = trial_gradient, gradient
+            pull, trial_pull = trial_pull, pull
+            stretched = trial_stretched
+        # the last move's largest (direction still holds its direction)
+        self.residual = alpha * float(np.sqrt((direction**2).sum(axis=1).max()))
+        if x is not guess:
+            guess[...] = x
+        return guess
+
+    def _gradient(
+        self,
+        model: Model,
+        factor: _Factor,
+        base: np.ndarray,
+        x: np.ndarray,
+        product: np.ndarray,
+        pull: np.ndarray,
+        out: np.ndarray,
+    ) -> float:
+        """The gradient of the step's energy times ``h^2`` at ``x`` (see
+        :meth:`_lbfgs`), given ``product = A x``, into ``out`` ``(N, 3)``
+        (zero on pinned rows); the local step's pull into ``pull``. Returns
+        ``sum(w L |x_a - x_b|)``."""
+        stretched = model.spring_projection(x, factor.weight, pull)
+        np.subtract(product, base, out=out)
+        out -= pull
+        out[factor.fixed] = 0.0
+        return stretched
 
 
 #: Factorisations :class:`FastMassSpring` keeps (the most recently used).
 KEPT_FACTORS = 4
+#: Armijo's sufficient decrease: a trial step is taken when it lowers the
+#: energy by at least this fraction of what the slope promises.
+ARMIJO = 1e-4
+#: Step lengths (1, 1/2, 1/4 ...) the L-BFGS line search tries before it
+#: starts its history again (or, with none, stops: converged to round-off).
+ARMIJO_TRIALS = 8
 
 
 @dataclass
@@ -208,6 +357,7 @@ class _Factor:
     fixed: np.ndarray  # (P,) indices of the pinned points
     coupling: sp.csr_matrix  # (N, P) free rows' coupling to the pinned points
     weight: np.ndarray  # (S,) h^2 k per spring
+    matrix: sp.csr_matrix  # (N, N) the factorised matrix (L-BFGS's products)
 
 
 def _factorise(model: Model, control: Control, dt: float, air: float = 0.0) -> _Factor:
@@ -247,4 +397,4 @@ def _factorise(model: Model, control: Control, dt: float, air: float = 0.0) -> _
         matrix.data,
         MatrixType.CSR,
     )
-    return _Factor(solver, fixed, coupling, dt * dt * springs.stiffness)
+    return _Factor(solver, fixed, coupling, dt * dt * springs.stiffness, matrix)
