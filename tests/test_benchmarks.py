@@ -21,6 +21,7 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 
 RUNS = {
+    "accelerators.py": ([], "accelerators.md"),
     "adaptive.py": ([], "adaptive.md"),
     "bending_cost.py": ([], "bending_cost.md"),
     "bending_models.py": ([], "bending_models.md"),

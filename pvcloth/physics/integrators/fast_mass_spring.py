@@ -249,13 +249,14 @@ class FastMassSpring(Integrator):
         Times ``h^2``, the step's energy is ``E(x) = x.A x / 2 - b.x -
         sum(w L |x_a - x_b|)`` (``A`` the global matrix, ``b`` = ``base``,
         ``w = h^2 k`` per spring of rest length ``L``), and its gradient
-        ``A x - b - p(x)`` with ``p`` the local step's pull. With no history
-        the direction ``A^-1 (b + p(x)) - x`` is one plain local/global
-        iteration; the history of the last :attr:`memory` moves and gradient
-        changes bends it towards Newton's. Each iteration costs one solve
-        and one pass over the springs, as a plain iteration does, and a few
-        vector sums per remembered move: ``A x`` is carried along (``A``
-        times each move is known from the solve), not multiplied out."""
+        ``A x - b - p(x)`` with ``p`` the local step's pull. With nothing
+        remembered the direction ``A^-1 (b + p(x)) - x`` is one plain
+        local/global iteration; the last :attr:`memory` moves and gradient
+        changes bend it towards Newton's (:class:`~pvcloth.physics.lbfgs.Memory`).
+        Each iteration costs one solve and one pass over the springs, as a
+        plain iteration does, and a few vector sums per remembered move:
+        ``A x`` is carried along (``A`` times each move is known from the
+        solve), not multiplied out."""
         fixed, solver = factor.fixed, factor.solver
         n = guess.shape[0]
         if self._memory is None or (self._memory.size, self._memory.moves.shape[1]) != (
@@ -279,6 +280,7 @@ class FastMassSpring(Integrator):
             )
             slope = np.vdot(gradient, direction)
             if not slope < 0.0:  # no way down left: converged to round-off
+                alpha = 0.0
                 break
             # Armijo backtracking from the full step, which is almost always
             # taken. The energy's change is summed from differences (the
