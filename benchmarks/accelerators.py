@@ -41,9 +41,9 @@ FRAME = 1 / 60
 START = 3 / 60 if SMOKE else 0.5  # s
 ITERATIONS = (5, 10) if SMOKE else (5, 10, 20, 50, 100)
 REPEATS = 2 if SMOKE else 9
-#: Iterations of the converged steps (L-BFGS stops before, once no step
-#: lowers the energy).
-CONVERGED = 200 if SMOKE else 3000
+#: Iterations of the converged step (L-BFGS stops before, once no step
+#: lowers the energy), and of Chebyshev's run that checks it.
+CONVERGED, CHECK = (200, 400) if SMOKE else (3000, 20000)
 
 
 def one_step(sim, start, accelerator: str, iterations: int, repeats: int):
@@ -71,7 +71,7 @@ def main() -> None:
     args = parser.parse_args()
     scene = pvcloth.load_scene(HERE.parent / "data" / "scenes" / "cotton.toml")
     scene = scene.with_resolution(args.size)
-    rows = []
+    rows, checks = [], []
     with one_blas_thread():
         for name in ("fast_mass_spring", "fast_bdf2"):
             sim = pvcloth.Simulation(scene, integrator=name)
@@ -81,9 +81,8 @@ def main() -> None:
             start, _ = PinVelocities(sim.model.n_points)(
                 sim.state, pinned, sim.state.x[pinned], FRAME
             )
-            converged, _, last = one_step(sim, start, "lbfgs", CONVERGED, 1)
-            check, _, _ = one_step(sim, start, "chebyshev", CONVERGED, 1)
-            print({"integrator": name, "converged last move m": last}, flush=True)
+            converged, _, _ = one_step(sim, start, "lbfgs", CONVERGED, 1)
+            check, _, _ = one_step(sim, start, "chebyshev", CHECK, 1)
             for iterations in ITERATIONS:
                 cells = []
                 for accelerator in ("chebyshev", "lbfgs"):
@@ -95,10 +94,9 @@ def main() -> None:
                 row = f"| {name} | {iterations} | {' | '.join(cells)} |"
                 print(row, flush=True)
                 rows.append(row)
-            rows.append(
-                f"| {name}: converged | - | Chebyshev with {CONVERGED} iterations "
-                f"{1e3 * rms_distance(check, converged):.4f} mm from it | - | - "
-                f"| last move {1e3 * last:.2e} mm | - | - |"
+            checks.append(
+                f"`{name}`: Chebyshev with {CHECK} iterations ends "
+                f"{1e3 * rms_distance(check, converged):.4f} mm from it."
             )
     lines = [
         "# Chebyshev against L-BFGS: one frame step",
@@ -116,6 +114,11 @@ def main() -> None:
         "| L-BFGS: distance (mm) | last move (mm) | ms |",
         "|---|---|---|---|---|---|---|---|",
         *rows,
+        "",
+        f"The converged step: L-BFGS with up to {CONVERGED} iterations, which stops once no "
+        "step lowers the energy in double precision. " + " ".join(checks) + " Where "
+        "compressed springs make the step's energy non-convex (the cloth folds), long runs "
+        "of either kind may settle apart: a distance below the check's is not resolved.",
     ]
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
