@@ -335,7 +335,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--integrators",
         required=True,
         metavar="A,B,...",
-        help="comma-separated, one panel each, e.g. symplectic_euler,rk4,fast_mass_spring",
+        help="comma-separated, one panel each, e.g. symplectic_euler,rk4,fast_mass_spring "
+        "(NAME+lbfgs: with solver.accelerator = 'lbfgs', e.g. fast_bdf2,fast_bdf2+lbfgs)",
     )
     compare.add_argument(
         "--dts",

@@ -462,7 +462,7 @@ def test_compare_draws_one_labelled_panel_per_integrator(tmp_path):
         "compare",
         str(SCENES / "hanging.toml"),
         "--integrators",
-        "symplectic_euler,fast_mass_spring,implicit_euler",
+        "symplectic_euler,fast_mass_spring,fast_bdf2+lbfgs",
         "--dts",
         "auto,1/60,1/60",
         "-o",
@@ -481,7 +481,7 @@ def test_compare_draws_one_labelled_panel_per_integrator(tmp_path):
     assert [line.split(",")[0].strip() for line in lines] == [
         "symplectic_euler",
         "fast_mass_spring",
-        "implicit_euler",
+        "fast_bdf2+lbfgs",  # an integrator with its solver.accelerator
     ]
     assert all("wall per simulated s" in line and "m RMS" in line for line in lines)
     # each third of the frame shows a cloth
@@ -489,6 +489,20 @@ def test_compare_draws_one_labelled_panel_per_integrator(tmp_path):
     reddish = (last[..., 0] - last[..., 1] > 25) & (last[..., 0] - last[..., 2] > 15)
     for k in range(3):
         assert reddish[:, 200 * k : 200 * (k + 1)].mean() > 0.02
+
+
+def test_compare_refuses_an_unknown_accelerator(tmp_path):
+    result = run_pvcloth(
+        "compare",
+        str(SCENES / "hanging.toml"),
+        "--integrators",
+        "fast_bdf2,fast_bdf2+newton",
+        "-o",
+        "x.gif",
+        cwd=tmp_path,
+    )
+    assert result.returncode == 2
+    assert "solver.accelerator: 'newton' is not allowed" in result.stderr
 
 
 def test_compare_refuses_a_mismatched_step_list(tmp_path):

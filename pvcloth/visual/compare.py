@@ -63,7 +63,7 @@ class Panel:
     def label(self) -> str:
         sim = self.sim
         lines = [
-            f"{sim.integrator.name}, dt = {sim.dt:.3g} s",
+            f"{method_name(sim)}, dt = {sim.dt:.3g} s",
             f"{self.wall_per_second:.3g} s wall per simulated s",
             f"error {self.error:.3g} m RMS"
             + (f"   DIVERGED at {sim.time:.2f} s" if self.diverged else ""),
@@ -108,6 +108,28 @@ def parse_steps(text: str) -> list[float | None]:
     return steps
 
 
+def panel_scene(scene: Scene, method: str, dt: float | None) -> Scene:
+    """``scene`` under ``method`` (an integrator's name, ``+ACCELERATOR``
+    optional) at step ``dt``.
+
+    >>> import pvcloth
+    >>> solver = panel_scene(pvcloth.Scene(), "fast_bdf2+lbfgs", 1 / 60).solver
+    >>> solver.integrator, solver.accelerator
+    ('fast_bdf2', 'lbfgs')
+    """
+    name, _, accelerator = method.partition("+")
+    changes = {"solver.integrator": name, "solver.dt": dt}
+    if accelerator:
+        changes["solver.accelerator"] = accelerator
+    return scene.with_overrides(changes)
+
+
+def method_name(sim: Simulation) -> str:
+    """The integrator's name, with ``+ACCELERATOR`` when the scene names one."""
+    accelerator = sim.scene.solver.accelerator
+    return sim.integrator.name + (f"+{accelerator}" if accelerator else "")
+
+
 def compare(
     scene: Scene,
     output: str | os.PathLike,
@@ -129,7 +151,8 @@ def compare(
         ``.gif``, ``.mp4`` or ``.png`` (the last frame).
     integrators : list of str
         One panel each (1 to :data:`MAX_PANELS`); a name may repeat with
-        different steps.
+        different steps, and may end in ``+ACCELERATOR`` for the fast
+        implicit ones (``"fast_bdf2+lbfgs"``: ``solver.accelerator``).
     dts : list of float or None, optional
         Each panel's step (``None``: the automatic one); one value for all
         panels, or one per panel. By default the scene's.
@@ -171,8 +194,8 @@ def compare(
             "dts", f"give one step or one per integrator ({len(integrators)}), got {len(dts)}"
         )
     panels = [
-        Panel(Simulation(scene.with_overrides({"solver.integrator": name, "solver.dt": dt})))
-        for name, dt in zip(integrators, dts, strict=True)
+        Panel(Simulation(panel_scene(scene, method, dt)))
+        for method, dt in zip(integrators, dts, strict=True)
     ]
     for panel in panels:
         panel.sim.frames(frames, fps)  # checks frames, fps and the run length
