@@ -218,6 +218,7 @@ class FastMassSpring(Integrator):
         pull, rhs = self._pull, self._rhs
         previous, new = self._iterates
         rho2, omega = self.rho**2, 1.0
+        self.residual = 0.0
         for k in range(self.iterations):
             # local: every spring at its rest length along its current
             # direction (h^2 k L u, summed at its ends); global: one solve,
@@ -314,8 +315,9 @@ class FastMassSpring(Integrator):
             gradient, trial_gradient = trial_gradient, gradient
             pull, trial_pull = trial_pull, pull
             stretched = trial_stretched
-        # the last move's largest (direction still holds its direction)
-        self.residual = alpha * float(np.sqrt((direction**2).sum(axis=1).max()))
+        # The last move's largest: direction holds its direction, unless no
+        # move was made (alpha 0; with no iteration, not even written).
+        self.residual = alpha * float(np.sqrt((direction**2).sum(axis=1).max())) if alpha else 0.0
         if x is not guess:
             guess[...] = x
         return guess
