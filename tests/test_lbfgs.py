@@ -101,6 +101,7 @@ def test_accelerator_is_a_scene_key_and_a_live_edit():
     sim.update({"solver.accelerator": "lbfgs"})
     assert sim.integrator.accelerator == "lbfgs"
     assert "lbfgs accelerator" in dict(sim.scene.summary())["solver"]
+    assert sim.snapshot().integrator == "fast_bdf2+lbfgs"  # what the window shows
     sim.advance(0.1)
     assert np.isfinite(sim.positions).all()
     with pytest.raises(pvcloth.SceneError, match=r"solver.accelerator.*chebyshev, lbfgs"):

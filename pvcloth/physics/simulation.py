@@ -346,12 +346,20 @@ class Simulation(Clocks, LiveEdits, Pins):
             t=state.t,
             steps=self.steps,
             pinned=self.control.pinned_index.copy(),
-            integrator=self.integrator.name,
+            integrator=self.integrator_label,
             dt=self.dt,
             dt_source=self.dt_source,
             adaptive=self.controller is not None,
             wind=self.scene.wind,
         )
+
+    @property
+    def integrator_label(self) -> str:
+        """The integrator's name, with ``+ACCELERATOR`` when the scene names
+        one (``"fast_bdf2+lbfgs"``): what the window and the compared
+        panels show."""
+        accelerator = self.scene.solver.accelerator
+        return self.integrator.name + (f"+{accelerator}" if accelerator else "")
 
     @property
     def resolution(self) -> tuple[int, int]:

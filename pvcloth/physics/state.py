@@ -165,7 +165,7 @@ class Snapshot:
     pinned : ndarray, shape (P,)
         Indices of the pinned points.
     integrator : str
-        The integrator's name.
+        The integrator's name (``+ACCELERATOR`` when the scene names one).
     dt : float
         The step (s).
     dt_source : str

@@ -63,7 +63,7 @@ class Panel:
     def label(self) -> str:
         sim = self.sim
         lines = [
-            f"{method_name(sim)}, dt = {sim.dt:.3g} s",
+            f"{sim.integrator_label}, dt = {sim.dt:.3g} s",
             f"{self.wall_per_second:.3g} s wall per simulated s",
             f"error {self.error:.3g} m RMS"
             + (f"   DIVERGED at {sim.time:.2f} s" if self.diverged else ""),
@@ -122,12 +122,6 @@ def panel_scene(scene: Scene, method: str, dt: float | None) -> Scene:
     if accelerator:
         changes["solver.accelerator"] = accelerator
     return scene.with_overrides(changes)
-
-
-def method_name(sim: Simulation) -> str:
-    """The integrator's name, with ``+ACCELERATOR`` when the scene names one."""
-    accelerator = sim.scene.solver.accelerator
-    return sim.integrator.name + (f"+{accelerator}" if accelerator else "")
 
 
 def compare(
