@@ -107,8 +107,10 @@ def main() -> None:
         f"cotton scene at {args.size}x{args.size} points run with each integrator to "
         f"{START:g} s, then one 1/60 s step from that state with each `solver.accelerator` "
         "and K iterations. *distance* = RMS point distance from the same step solved to "
-        "convergence (mm); *last move* = the last iteration's largest move of a point "
-        f"(mm, `residual`); ms = median wall time of the step over {REPEATS} repeats.",
+        "convergence (mm); *last move* = the integrator's `residual` (mm): the last "
+        "iteration's largest move of a point, of the plain update before the extrapolation "
+        "for Chebyshev and of the step taken for L-BFGS (how fast each was still moving, "
+        f"not a distance); ms = median wall time of the step over {REPEATS} repeats.",
         "",
         "| integrator | K | Chebyshev: distance (mm) | last move (mm) | ms "
         "| L-BFGS: distance (mm) | last move (mm) | ms |",

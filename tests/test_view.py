@@ -503,6 +503,19 @@ def test_compare_refuses_an_unknown_accelerator(tmp_path):
     )
     assert result.returncode == 2
     assert "solver.accelerator: 'newton' is not allowed" in result.stderr
+    result = run_pvcloth(
+        "compare",
+        str(SCENES / "hanging.toml"),
+        "--integrators",
+        "rk4+lbfgs",
+        "-o",
+        "x.gif",
+        cwd=tmp_path,
+    )
+    assert result.returncode == 2
+    assert "'rk4+lbfgs': +ACCELERATOR (one of chebyshev, lbfgs) follows an integrator that" in (
+        result.stderr
+    )
 
 
 def test_compare_refuses_a_mismatched_step_list(tmp_path):

@@ -36,8 +36,10 @@ class Memory:
     Attributes
     ----------
     moves, changes, products : numpy.ndarray
-        Per slot, shape (size, N * 3): a move ``s`` (m), the gradient's
-        change ``y`` over it and ``A s`` (the gradient's units).
+        Per slot, shape (size + 1, N * 3): a move ``s`` (m), the gradient's
+        change ``y`` over it and ``A s`` (the gradient's units); one slot
+        more than ``size``, so a new pair is written into a free slot and
+        looked at before it replaces the oldest.
     inverse_curvatures : numpy.ndarray
         ``1 / (s . y)`` per slot, shape (size,).
     slots : list of int
@@ -46,11 +48,11 @@ class Memory:
 
     def __init__(self, size: int, n: int):
         self.size = size
-        self.moves = np.empty((size, 3 * n))
-        self.changes = np.empty((size, 3 * n))
-        self.products = np.empty((size, 3 * n))
-        self.inverse_curvatures = np.empty(size)
-        self._weights = np.empty(size)
+        self.moves = np.empty((size + 1, 3 * n))
+        self.changes = np.empty((size + 1, 3 * n))
+        self.products = np.empty((size + 1, 3 * n))
+        self.inverse_curvatures = np.empty(size + 1)
+        self._weights = np.empty(size + 1)
         self.slots: list[int] = []
 
     def clear(self) -> None:
@@ -61,11 +63,11 @@ class Memory:
         """Keep the pair from ``x0`` to ``x1`` (gradients ``g0``, ``g1``,
         products with ``A`` ``p0``, ``p1``; all ``(N, 3)``), in place of the
         oldest when full; whether it was kept (only a pair with ``s . y >
-        0``, which keeps the estimate positive definite)."""
+        0``, which keeps the estimate positive definite: a rejected pair
+        leaves the kept ones as they were)."""
         if self.size == 0:
             return False
-        free = [k for k in range(self.size) if k not in self.slots]
-        slot = free[0] if free else self.slots[0]
+        slot = next(k for k in range(self.size + 1) if k not in self.slots)
         move, change = self.moves[slot], self.changes[slot]
         np.subtract(x1.ravel(), x0.ravel(), out=move)
         np.subtract(g1.ravel(), g0.ravel(), out=change)
@@ -74,7 +76,7 @@ class Memory:
             return False
         np.subtract(p1.ravel(), p0.ravel(), out=self.products[slot])
         self.inverse_curvatures[slot] = 1.0 / curvature
-        if not free:
+        if len(self.slots) == self.size:
             self.slots.pop(0)
         self.slots.append(slot)
         return True

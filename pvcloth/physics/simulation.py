@@ -356,10 +356,11 @@ class Simulation(Clocks, LiveEdits, Pins):
     @property
     def integrator_label(self) -> str:
         """The integrator's name, with ``+ACCELERATOR`` when the scene names
-        one (``"fast_bdf2+lbfgs"``): what the window and the compared
-        panels show."""
+        one and the integrator iterates (``"fast_bdf2+lbfgs"``): what the
+        window and the compared panels show."""
         accelerator = self.scene.solver.accelerator
-        return self.integrator.name + (f"+{accelerator}" if accelerator else "")
+        named = accelerator is not None and self.integrator.iterative
+        return self.integrator.name + (f"+{accelerator}" if named else "")
 
     @property
     def resolution(self) -> tuple[int, int]:

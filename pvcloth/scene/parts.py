@@ -281,9 +281,9 @@ class SolverSpec:
     accelerator : {"chebyshev", "lbfgs"}, optional
         How ``fast_mass_spring`` and ``fast_bdf2`` speed up those
         iterations (default ``"chebyshev"``): ``"lbfgs"`` costs more per
-        iteration and ends closer to the converged step for the same count,
-        and every iteration lowers the step's energy (the other integrators
-        leave it unused).
+        iteration and, from about ten a step, ends closer to the converged
+        step for the same count; every iteration lowers the step's energy
+        (the other integrators leave it unused).
     tolerance : float, optional
         Position error in metres (1e-12 to 1) a second of simulation may
         add: the step is then chosen for every step from the integrator's

@@ -22,8 +22,10 @@ import numpy as np
 
 from pvcloth.compilation import compile_seconds
 from pvcloth.errors import DivergenceError, InputError
+from pvcloth.physics.integrators import INTEGRATORS
 from pvcloth.physics.reference import FollowingReference
 from pvcloth.physics.simulation import Simulation
+from pvcloth.scene.parts import ACCELERATORS
 from pvcloth.scene.spec import Scene
 from pvcloth.visual.movie import RenderStats, check_output, record
 
@@ -117,9 +119,16 @@ def panel_scene(scene: Scene, method: str, dt: float | None) -> Scene:
     >>> solver.integrator, solver.accelerator
     ('fast_bdf2', 'lbfgs')
     """
-    name, _, accelerator = method.partition("+")
+    name, plus, accelerator = method.partition("+")
     changes = {"solver.integrator": name, "solver.dt": dt}
-    if accelerator:
+    if plus:
+        iterating = sorted(n for n, cls in INTEGRATORS.items() if cls.iterative)
+        if name not in iterating or not accelerator:
+            raise InputError(
+                "integrators",
+                f"{method!r}: +ACCELERATOR (one of {', '.join(ACCELERATORS)}) follows an "
+                f"integrator that iterates ({', '.join(iterating)})",
+            )
         changes["solver.accelerator"] = accelerator
     return scene.with_overrides(changes)
 

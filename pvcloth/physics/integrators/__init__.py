@@ -30,7 +30,8 @@ def get_integrator(
     ``iterations`` per step and their ``accelerator`` (one of
     :data:`~pvcloth.scene.parts.ACCELERATORS`) for those that iterate
     (``None``: their default; the others do not use them). Fewer than the
-    integrator's ``min_iterations`` are refused, with its reason.
+    integrator's ``fewest_iterations(accelerator)`` are refused, with its
+    reason.
 
     >>> get_integrator("fast_bdf2", iterations=20).iterations
     20
@@ -47,7 +48,8 @@ def get_integrator(
     if iterations < fewest:
         raise InputError(
             "solver.iterations",
-            f"{cls.name} needs at least {fewest} iterations a step, got "
-            f"{iterations}: {cls.too_few_iterations}",
+            f"{cls.name} needs at least {fewest} iterations a step"
+            + (f" with the {accelerator} accelerator" if accelerator else "")
+            + f", got {iterations}: {cls.too_few_iterations}",
         )
     return cls(iterations=iterations, **options)

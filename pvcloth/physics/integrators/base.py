@@ -71,12 +71,13 @@ class Integrator(ABC):
         symplectic step does), so the divergence guard need not look again;
         ``None`` otherwise.
     min_iterations : int
-        The fewest iterations a step of an ``iterative`` one may take
-        (:func:`~pvcloth.physics.integrators.get_integrator` refuses fewer,
-        saying :attr:`too_few_iterations`; the window's ``i`` key passes
-        over it when a scene gives fewer).
+        The fewest iterations a step of an ``iterative`` one may take with
+        its default accelerator; :meth:`fewest_iterations` gives it per
+        accelerator (:func:`~pvcloth.physics.integrators.get_integrator`
+        refuses fewer, saying :attr:`too_few_iterations`; the window's
+        ``i`` key passes over it when a scene gives fewer).
     too_few_iterations : str
-        Why fewer than :attr:`min_iterations` are refused.
+        Why fewer than :meth:`fewest_iterations` are refused.
     uses_blas : bool
         Whether its step calls BLAS (linear solves, long dot products): the
         simulation then holds BLAS to one thread around it

@@ -79,13 +79,14 @@ class FastMassSpring(Integrator):
     global matrix is the first estimate of the Hessian, so the first
     iteration is a plain local/global one, and the last :attr:`memory`
     moves refine it; an Armijo line search makes every iteration lower the
-    energy (tested against ``backward_euler``'s own potential), so, unlike
-    Chebyshev's, it cannot gain energy by stopping early. Each iteration
-    costs one solve and one pass over the springs, as a plain one does,
-    plus a few vector sums per remembered move. It stops early only where
-    the energy, in double precision, no longer shows a decrease (about a
-    micrometre from the answer). :attr:`residual` is the last iteration's
-    largest move of a point (m), either way.
+    energy (tested against ``backward_euler``'s own potential), where
+    Chebyshev's can climb. That bounds each step, not the run: on a light
+    undamped cloth, two or three iterations a step still let its energy
+    rise 1.3- to 1.9-fold (``benchmarks/results/frame_step_stability.md``).
+    Each iteration costs one solve and one pass over the springs, as a
+    plain one does, plus a few vector sums per remembered move. It stops
+    early only where the energy, in double precision, no longer shows a
+    decrease.
 
     Parameters
     ----------
@@ -114,13 +115,18 @@ class FastMassSpring(Integrator):
         accelerator: str = "chebyshev",
         memory: int = 5,
     ):
+        if memory < 0:
+            raise ValueError(f"memory must be 0 or more moves, got {memory}")
         self.iterations = iterations
         self.rho = rho
-        self.accelerator = choice("accelerator", accelerator, ACCELERATORS)
+        self.accelerator = accelerator
         self.memory = memory
-        #: The last iteration's largest move of a point (m): how far the
-        #: step stopped from its own answer, at the last iteration's pace.
+        #: The last step's last move (m), its largest over the points: with
+        #: Chebyshev, of the plain update before the extrapolation; with
+        #: L-BFGS, of the step taken (0 if none was). How fast the iterations
+        #: were still moving when stopped, not a distance from the answer.
         self.residual = 0.0
+        self._lbfgs_buffers: tuple[np.ndarray, ...] = ()
         self._factors: dict[tuple, _Factor] = {}
         #: Error estimate of the last step (m): see :func:`drift_error`.
         self.error = 0.0
@@ -128,6 +134,16 @@ class FastMassSpring(Integrator):
         self.factorisations = 0
         self._pull: np.ndarray | None = None  # (N, 3) buffers the iterations reuse
         self._memory: Memory | None = None  # L-BFGS's pairs
+
+    @property
+    def accelerator(self) -> str:
+        """How the iterations are sped up: one of
+        :data:`~pvcloth.scene.parts.ACCELERATORS` (checked when set)."""
+        return self._accelerator
+
+    @accelerator.setter
+    def accelerator(self, value: str) -> None:
+        self._accelerator = choice("accelerator", value, ACCELERATORS)
 
     def stable_dt(self, model: Model, state: State, control: Control) -> float:
         return float("inf")  # the converged step is backward Euler's: A-stable
