@@ -266,9 +266,9 @@ def test_implicit_euler_keeps_the_stated_relation(reference_8):
 def test_bdf2_follows_the_tolerance_with_a_tenth_of_backward_euler_s_steps(reference_8):
     """BDF2's estimate (from three velocities, free) through the controller:
     after 0.5 s the error is between a tenth of ``tolerance * t`` and that,
-    shrinking with it (measured 0.42, 0.61 and 0.82 of it at 1e-2 to 1e-4 m),
-    and being second order it takes far fewer steps than backward Euler
-    (141 and 386 at 1e-2 and 1e-3 m, against 1055 and 10665)."""
+    shrinking with it, and being second order it takes far fewer steps
+    than backward Euler (188 and 456 at 1e-2 and 1e-3 m, its steps grown
+    at most twofold, against 1055 and 10665)."""
     errors = []
     for tolerance, most in ((1e-2, 300), (1e-3, 800), (1e-4, 2400)):
         sim = adaptive(hanging(8), tolerance, **{"solver.integrator": "bdf2"})
@@ -295,6 +295,24 @@ def test_a_factorising_method_keeps_its_step_and_its_factor():
         sim.steps,
     )
     assert sim.time == pytest.approx(0.5, abs=1e-9)
+
+
+def test_bdf2_steps_grow_only_as_far_as_its_history_reaches():
+    """A BDF2 step over 2.4 times its last restarts with backward Euler,
+    whose first-order estimate is far over a tolerance BDF2 meets: a
+    controller growing steps fivefold was rejected at nearly every attempt.
+    On the 16x16 hanging cloth at 1e-5 m, 15 frames took 8685 steps and
+    2832 factorisations so (in one advance of 0.25 s the step sat near
+    5e-6 s for minutes). Grown by at most twice: 3247 steps, 108."""
+    sim = adaptive(hanging(16), 1e-5, **{"solver.integrator": "fast_bdf2"})
+    for _ in sim.frames(16, 60.0):
+        pass
+    assert sim.controller.grow == 2.0
+    assert sim.steps < 5000, sim.steps
+    assert sim.integrator.factorisations < 0.05 * sim.steps, (
+        sim.integrator.factorisations,
+        sim.steps,
+    )
 
 
 def test_stats_report_the_steps_taken():

@@ -25,8 +25,9 @@ The loop:
   ``h^k``). The integral part reacts to this
   step's error, the proportional part damps the oscillation a plain
   ``(tol / err)^(1/k)`` rule shows on problems near their stability limit.
-- Each change is held within :data:`SHRINK` and :data:`GROW` times the step;
-  after a rejection the next step may not grow. Steps lie between
+- Each change is held within :data:`SHRINK` and :data:`GROW` times the step
+  (BDF2's within twice: see ``Integrator.max_step_growth``); after a
+  rejection the next step may not grow. Steps lie between
   ``solver.min_dt`` (default :data:`MIN_STEP`; below it the run stops with a
   DivergenceError: the problem is too stiff or singular for this tolerance)
   and ``solver.max_dt`` (default :data:`MAX_STEP`), lowered for an explicit
@@ -105,6 +106,11 @@ class StepController:
         default :data:`MIN_STEP` and :data:`MAX_STEP`). The simulation lowers
         ``max_step`` to 0.8 of an explicit method's estimated stable step: a
         longer step is rejected by its error anyway.
+    grow : float
+        Largest factor from one accepted step to the next: :data:`GROW`, or
+        less for a method that cannot build on a shorter last step
+        (``Integrator.max_step_growth``: BDF2 restarts with a first-order
+        step beyond 2.4 times its last, whose error is then rejected).
 
     Attributes
     ----------
@@ -141,6 +147,7 @@ class StepController:
     step: float
     min_step: float = MIN_STEP
     max_step: float = MAX_STEP
+    grow: float = GROW
     previous: float | None = None
     rejected: int = 0
     taken: float = 0.0
@@ -161,7 +168,7 @@ class StepController:
             factor = SAFETY * max(ratio, 1e-10) ** (-0.7 / k)
             if self.previous is not None:
                 factor *= max(self.previous, 1e-10) ** (0.4 / k)
-            factor = min(GROW, max(SHRINK, factor))
+            factor = min(self.grow, max(SHRINK, factor))
             if self._after_rejection:
                 factor = min(factor, 1.0)
             self.previous, self._after_rejection = ratio, False

@@ -25,7 +25,7 @@ from collections.abc import Callable
 import numpy as np
 
 from pvcloth.errors import SceneError
-from pvcloth.physics.adaptive import MAX_STEP, MIN_STEP, UNIT_TIME, StepController
+from pvcloth.physics.adaptive import GROW, MAX_STEP, MIN_STEP, UNIT_TIME, StepController
 from pvcloth.scene.parts import MEASURING_INTEGRATORS
 from pvcloth.scene.spec import Scene
 
@@ -210,7 +210,14 @@ def step_controller(
     first = min(dt, largest)
     if solver.dt is None:
         first = min(first, max(starting(tolerance), smallest))
-    return StepController(tolerance, integrator.order, first, min_step=smallest, max_step=largest)
+    return StepController(
+        tolerance,
+        integrator.order,
+        first,
+        min_step=smallest,
+        max_step=largest,
+        grow=min(GROW, integrator.max_step_growth),
+    )
 
 
 #: Where a simulation's step came from (``Simulation.dt_source``), in the

@@ -78,6 +78,10 @@ class Integrator(ABC):
         ``i`` key passes over it when a scene gives fewer).
     too_few_iterations : str
         Why fewer than :meth:`fewest_iterations` are refused.
+    max_step_growth : float
+        The longest step it takes as a continuation of its last, as a
+        multiple of that one (``inf``: any); adaptive runs grow the step by
+        at most this factor (:class:`~pvcloth.physics.adaptive.StepController`).
     uses_blas : bool
         Whether its step calls BLAS (linear solves, long dot products): the
         simulation then holds BLAS to one thread around it
@@ -93,6 +97,7 @@ class Integrator(ABC):
     too_few_iterations: str = ""
     converges_to: str | None = None
     interactive: bool = True
+    max_step_growth: float = float("inf")
     uses_blas: bool = False
     embedded: bool = False
     steady_steps: bool = False
