@@ -53,6 +53,11 @@ def corner_drag(n: int, integrator: str, contact: bool = True):
         {"cloth.center": [0.0, 0.0, 0.01], "pins.corners": []}
     )
     sim = Simulation(_with_contact(scene, n, integrator, contact))
+    # The floor's contact after the step only, as the scene was made with:
+    # with it inside the solve (fast_mass_spring's default) the dragged cloth
+    # slides along the floor further (median 0.99 m against 0.69 m in 0.8 s
+    # at 24x24) and its corner never comes down onto it, so no layers press.
+    sim.integrator.contact_in_step = False
     nx, ny = sim.resolution
     corner = (0, 0)
     start = sim.positions[sim.point_index(corner)].copy()

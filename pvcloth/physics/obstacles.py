@@ -126,6 +126,19 @@ class Obstacle:
         """Signed distance of world points to the real surface (negative inside)."""
         raise NotImplementedError
 
+    def gap(self, points: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """How far world ``points`` (m, ``(k, 3)``) are outside the grown
+        shape at time ``t``: ``(gap, normal)``, the signed distance (m,
+        ``(k,)``, negative inside) and the outward unit normal at the
+        nearest surface point (``(k, 3)``, world frame). What a contact
+        inside the step keeps at zero or above
+        (:mod:`pvcloth.physics.contact`)."""
+        gap, normal = self._gap_local(self.to_local(points, t))
+        return gap, normal @ self.axes.T
+
+    def _gap_local(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        raise NotImplementedError
+
     # -- response -------------------------------------------------------------
 
     def collide(self, x0, x1, v1, free, t0: float, t1: float) -> Contacts:
@@ -254,6 +267,13 @@ class Sphere(Obstacle):
     def distance(self, points, t=0.0):
         return np.linalg.norm(points - self.center_at(t), axis=1) - self.radius
 
+    def _gap_local(self, q):
+        length = np.linalg.norm(q, axis=1)
+        normal = np.where(
+            length[:, None] > TINY, q / np.maximum(length, TINY)[:, None], [0.0, 0.0, 1.0]
+        )
+        return length - self.grown, normal
+
     def _shape_text(self):
         return "sphere r = {:g} m at ({:g}, {:g}, {:g})".format(self.radius, *self.center)
 
@@ -317,6 +337,20 @@ class Box(Obstacle):
         outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
         return outside + np.minimum(q.max(axis=1), 0.0)
 
+    def _gap_local(self, q):
+        # Outside: from the nearest point of the grown box; inside: out
+        # through the nearest face.
+        beyond = q - np.clip(q, -self.half, self.half)
+        length = np.linalg.norm(beyond, axis=1)
+        depth = self.half - np.abs(q)  # (k, 3) m to each face pair
+        rows = np.arange(q.shape[0])
+        axis = np.argmin(depth, axis=1)
+        face = np.zeros_like(q)
+        face[rows, axis] = np.where(q[rows, axis] < 0.0, -1.0, 1.0)
+        outside = length > 0.0
+        normal = np.where(outside[:, None], beyond / np.where(outside, length, 1.0)[:, None], face)
+        return np.where(outside, length, -depth[rows, axis]), normal
+
     def surface(self, extent):
         """Six faces of four vertices each (so each face shades flat)."""
         vertices, triangles = [], []
@@ -378,6 +412,11 @@ class Ground(Obstacle):
 
     def distance(self, points, t=0.0):
         return (points - self.center_at(t)) @ self.normal
+
+    def _gap_local(self, q):
+        normal = np.zeros_like(q)
+        normal[:, 2] = 1.0
+        return q[:, 2] - self.thickness, normal
 
     def surface(self, extent):
         """A square of side ``extent`` centred on the plane's point."""

@@ -52,6 +52,10 @@ class Step:
     integrator_check : tuple of (float, bool) or None
         The integrator's own ``(largest speed, all finite)`` of ``after``
         (``Integrator.check``), if it made one.
+    held : list of Contacts
+        The points the integrator's own solve held against obstacles
+        (``Integrator.held_contacts``), which the obstacle contacts add to
+        their report.
     """
 
     before: State
@@ -63,6 +67,7 @@ class Step:
     pin_velocity: np.ndarray
     reports: dict[str, Any] = field(default_factory=dict)
     integrator_check: tuple[float, bool] | None = None
+    held: list = field(default_factory=list)
 
 
 class Operator(Protocol):
@@ -110,7 +115,8 @@ class PinVelocities:
 
 class ObstacleContacts:
     """Swept collision with the model's obstacles; reports the points each
-    touched (a list of :class:`~pvcloth.physics.obstacles.Contacts`)."""
+    touched (a list of :class:`~pvcloth.physics.obstacles.Contacts`), with
+    those the integrator's solve held (:attr:`Step.held`)."""
 
     name = "obstacles"
 
@@ -119,7 +125,7 @@ class ObstacleContacts:
 
     def __call__(self, step: Step) -> None:
         with np.errstate(all="ignore"):  # a diverging step is the guard's to report
-            step.reports[self.name] = self.model.collide(
+            step.reports[self.name] = step.held + self.model.collide(
                 step.before.x,
                 step.after.x,
                 step.after.v,

@@ -513,6 +513,7 @@ class Simulation(Clocks, LiveEdits, Pins):
             pin_positions,
             pin_velocity,
             integrator_check=self.integrator.check,
+            held=self.integrator.held_contacts(new.x, new.t) if self.model.obstacles else [],
         )
         for operator in self.pipeline:
             operator(step)

@@ -150,6 +150,13 @@ class Integrator(ABC):
         method starts again from the new state alone. Nothing, by default."""
         return None
 
+    def held_contacts(self, x: np.ndarray, t: float) -> list:
+        """The points its last step's own solve held against obstacles, as
+        :class:`~pvcloth.physics.obstacles.Contacts` with the normals at
+        positions ``x`` (m, ``(N, 3)``) and time ``t`` (s); none unless the
+        obstacles enter its solve (:mod:`pvcloth.physics.contact`)."""
+        return []
+
     def get_state(self) -> dict[str, np.ndarray]:
         """Arrays the integrator carries between steps (saved in checkpoints)."""
         return {}

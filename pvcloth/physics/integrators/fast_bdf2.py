@@ -112,6 +112,7 @@ class FastBDF2(KeepsLastStep, FastMassSpring):
             self.history.after(state, dt)
             return result
         x, v = state.x, state.v
+        self._begin_contact(model, state, dt)
         x_hat, v_hat, h = bdf2_start(last, x, v, dt)
         load = np.zeros_like(x)
         model.add_gravity(x, v, load)
