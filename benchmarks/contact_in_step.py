@@ -2,12 +2,15 @@
 
 ``python benchmarks/contact_in_step.py`` drops cotton (``data/scenes/cotton.toml``'s
 fabric, unpinned) flat onto the ground from 2 cm, and onto a 0.25 m sphere
-standing on the ground from 0.6 m, at 32x32 and 64x64 points, with
-``fast_bdf2`` at one 1/60 s step a frame. Each scene runs twice in turn in
-one process: with the obstacles' contact inside the solve (the default,
-:mod:`pvcloth.physics.contact`) and with it left to the response after the
-step alone (``integrator.contact_in_step = False``, as the explicit
-integrators have it). For each: the kinetic energy over the last simulated
+standing on the ground from 0.6 m, at one 1/60 s step a frame: with
+``fast_bdf2`` at 32x32 and 64x64 points (contact impulses in its
+local/global solve, :mod:`pvcloth.physics.contact`) and with ``bdf2`` at
+16x16 (a penalty in Newton's potential,
+:class:`~pvcloth.physics.integrators.backward_euler.ObstaclePenalty`; seconds
+a step at 64x64). Each runs twice in turn in one process: with the
+obstacles inside the solve (the default) and with them left to the response
+after the step alone (``integrator.contact_in_step = False``, as the
+explicit integrators have them). For each: the kinetic energy over the last simulated
 second (mean and largest: a cloth at rest has none, a jittering one keeps
 some), the smallest gap to an obstacle grown by its thickness over every
 frame (negative: inside), and the median wall time of a frame.
@@ -30,19 +33,23 @@ from pvcloth import ObstacleSpec
 from pvcloth.physics.simulation import Simulation
 
 HERE = Path(__file__).parent
-SIZES = (8,) if SMOKE else (32, 64)
+CASES = (
+    (("fast_bdf2", 8), ("bdf2", 6))
+    if SMOKE
+    else (("fast_bdf2", 32), ("fast_bdf2", 64), ("bdf2", 16))
+)
 SECONDS = 0.2 if SMOKE else 5.0
 GROUND = ObstacleSpec("ground", thickness=0.005, friction=0.5, static_friction=0.7)
 SPHERE = ObstacleSpec("sphere", center=(0, 0, 0.25), radius=0.25, thickness=0.01)
 SCENES = {"ground": ([GROUND], 0.02), "sphere": ([SPHERE, GROUND], 0.6)}
 
 
-def simulation(n: int, scene: str, inside: bool) -> Simulation:
+def simulation(integrator: str, n: int, scene: str, inside: bool) -> Simulation:
     """The cotton cloth of ``n x n`` points over ``scene``'s obstacles."""
     obstacles, height = SCENES[scene]
     base = pvcloth.load_scene(HERE.parent / "data" / "scenes" / "cotton.toml")
     base = base.with_resolution(n).with_overrides(
-        {"solver.integrator": "fast_bdf2", "solver.dt": 1 / 60, "pins.corners": []}
+        {"solver.integrator": integrator, "solver.dt": 1 / 60, "pins.corners": []}
     )
     cloth = dataclasses.replace(base.cloth, orientation="horizontal", center=(0, 0, height))
     sim = Simulation(dataclasses.replace(base, cloth=cloth, obstacles=tuple(obstacles)))
@@ -50,8 +57,8 @@ def simulation(n: int, scene: str, inside: bool) -> Simulation:
     return sim
 
 
-def run(n: int, scene: str, inside: bool) -> dict:
-    sim = simulation(n, scene, inside)
+def run(integrator: str, n: int, scene: str, inside: bool) -> dict:
+    sim = simulation(integrator, n, scene, inside)
     frames = round(SECONDS * 60)
     last = max(1, min(60, frames // 2))
     energies, walls, closest = [], [], float("inf")
@@ -80,32 +87,36 @@ def main() -> None:
         "",
         provenance(),
         "",
-        f"`python benchmarks/contact_in_step.py`: cotton with `fast_bdf2` (10 iterations) at "
+        f"`python benchmarks/contact_in_step.py`: cotton with `fast_bdf2` (10 iterations; "
+        f"impulses in its solve) and `bdf2` (Newton; a penalty in its potential) at "
         f"one 1/60 s step a frame for {SECONDS:g} s, dropped flat onto the ground from 2 cm "
         f"and onto a 0.25 m sphere on the ground from 0.6 m. Kinetic energy over the last "
         f"simulated second (J), the smallest gap to an obstacle grown by its thickness over "
         f"every frame (mm; negative is inside) and the median wall time of a frame (ms), the "
         f"two ways run in turn in one process.",
         "",
-        "| points | scene | contact | KE mean (J) | KE largest (J) | closest (mm) | ms / frame |",
-        "|---|---|---|---|---|---|---|",
+        "| integrator | points | scene | contact | KE mean (J) | KE largest (J) | closest (mm) "
+        "| ms / frame |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     ratios = []
-    for n in SIZES:
+    for integrator, n in CASES:
         for scene in SCENES:
             results = {}
             for inside in (True, False):
-                result = run(n, scene, inside)
+                result = run(integrator, n, scene, inside)
                 results[inside] = result
                 way = "inside the solve" if inside else "after the step"
                 lines.append(
-                    f"| {n}x{n} | {scene} | {way} | {result['mean']:.2g} | {result['most']:.2g} "
-                    f"| {1e3 * result['closest']:.3f} | {1e3 * result['frame']:.1f} |"
+                    f"| {integrator} | {n}x{n} | {scene} | {way} | {result['mean']:.2g} "
+                    f"| {result['most']:.2g} | {1e3 * result['closest']:.3f} "
+                    f"| {1e3 * result['frame']:.1f} |"
                 )
                 print(lines[-1], flush=True)
-            ratios.append((n, scene, results[True]["frame"] / results[False]["frame"]))
+            ratio = results[True]["frame"] / results[False]["frame"]
+            ratios.append((integrator, n, scene, ratio))
     lines += ["", "Cost of a frame, inside the solve over after the step:", ""]
-    lines += [f"- {n}x{n} {scene}: {ratio:.2f}" for n, scene, ratio in ratios]
+    lines += [f"- {name} {n}x{n} {scene}: {ratio:.2f}" for name, n, scene, ratio in ratios]
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text("\n".join(lines) + "\n")

@@ -234,12 +234,17 @@ class Model:
         if self.wind is not None:
             self.wind.set_time(t)
 
-    def collide(self, x0, x1, v1, movable, t0: float, t1: float) -> list[Contacts]:
+    def collide(self, x0, x1, v1, movable, t0: float, t1: float, held=()) -> list[Contacts]:
         """Resolve collisions of the step ``t0 -> t1`` in place on ``x1``, ``v1``
         for the ``movable`` point indices; returns the points that touched
         and their obstacle's normals, one :class:`Contacts` per obstacle that
-        may have been reached."""
+        may have been reached. ``held`` (one :class:`Contacts` per obstacle,
+        or empty) are the points the integrator's solve pushed on, whose
+        friction is applied here when it left it (a penalty's impulse)."""
         touched = []
+        for obstacle, contacts in zip(self.obstacles, held, strict=False):
+            if contacts.impulse is not None and contacts.index.size:
+                obstacle._hold(x1, v1, contacts, t0, t1)
         # A cube around everything that moved: flat reductions are ten times
         # cheaper than per-axis ones, and this only has to be conservative.
         low = np.full(3, min(x0.min(), x1.min()))

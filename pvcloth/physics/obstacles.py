@@ -50,6 +50,15 @@ class Contacts:
 
     index: np.ndarray  # (k,) point indices
     normal: np.ndarray  # (k, 3) outward unit normals, world frame
+    #: (k,) m/s: the normal impulse per unit mass an integrator's own solve
+    #: gave each point (a penalty's push), for Coulomb friction after the
+    #: step; None when the solve applied friction itself, or for the
+    #: response's own contacts.
+    impulse: np.ndarray | None = None
+    #: s: how far a point of the solve moves per unit change of its end
+    #: velocity (the step for backward Euler, two thirds of it for BDF2),
+    #: so friction's change of velocity moves the point consistently.
+    lever: float | None = None
 
 
 class Obstacle:
@@ -181,14 +190,28 @@ class Obstacle:
         x1[index] = self.to_world(q, t1) - dt * slowed
         return Contacts(index, normal_world)
 
-    def _respond(self, v, index, normal, obstacle_velocity) -> np.ndarray:
+    def _hold(self, x1, v1, held: Contacts, t0: float, t1: float) -> None:
+        """Coulomb friction on the points a solve's penalty pushed on, with
+        its normal impulse per unit mass: the approach it left (the penalty
+        lets a point sink a little) removed too."""
+        dt = max(t1 - t0, TINY)
+        obstacle_velocity = (self.center_at(t1) - self.center_at(t0)) / dt
+        slowed = self._respond(v1, held.index, held.normal, obstacle_velocity, held.impulse)
+        x1[held.index] -= (dt if held.lever is None else held.lever) * slowed
+
+    def _respond(self, v, index, normal, obstacle_velocity, pushed=None) -> np.ndarray:
         """Remove the approach velocity, apply friction; return the tangential
-        velocity that friction removed."""
+        velocity that friction removed. ``pushed`` (m/s per point) is a normal
+        impulse per unit mass already in the velocities (a solve's penalty):
+        friction takes it with the approach removed."""
         relative = v[index] - obstacle_velocity
         approach = np.einsum("ij,ij->i", relative, normal)
         into = approach < 0.0
         dv_n = np.where(into, -approach, 0.0)  # normal impulse per unit mass
         relative += dv_n[:, None] * normal
+        if pushed is not None:  # a solve's push, in the velocity already
+            dv_n = dv_n + pushed
+            into = into | (pushed > 0.0)
         tangential = relative - np.einsum("ij,ij->i", relative, normal)[:, None] * normal
         speed = np.linalg.norm(tangential, axis=1)
         sticks = into & (speed <= self.static_friction * dv_n)

@@ -132,6 +132,7 @@ class ObstacleContacts:
                 step.control.movable_index,
                 step.before.t,
                 step.after.t,
+                step.held,
             )
 
 

@@ -12,6 +12,7 @@ from scipy.sparse.linalg import splu
 from pvcloth.errors import DivergenceError
 from pvcloth.physics.forces import TINY_LENGTH
 from pvcloth.physics.integrators.base import Integrator, drift_error, register
+from pvcloth.physics.obstacles import Contacts
 from pvcloth.physics.springs import BlockPattern, stiffness_blocks
 from pvcloth.physics.state import Control, State
 
@@ -58,6 +59,11 @@ class BackwardEuler(Integrator):
     is kept from one iteration to the next while the residual at least
     halves (a chord step).
 
+    With obstacles (and no self-collision) the potential holds a penalty
+    for each (:class:`ObstaclePenalty`), so the solve sees what holds the
+    cloth; the response after the step stays as the fail-safe and applies
+    the friction.
+
     A step has converged when no point is left with an unbalanced
     acceleration (``r / h^2``, the force the step leaves unbalanced over the
     mass) above :attr:`tolerance`, ``1e-3`` m/s^2 (a ten-thousandth of g):
@@ -99,6 +105,17 @@ class BackwardEuler(Integrator):
         #: Error estimate of the last step (m): see :func:`drift_error`.
         self.error = 0.0
         self._pattern: tuple[int, BlockPattern] | None = None
+        #: The obstacles' penalty of the last step's solve (None without
+        #: obstacles, or with self-collision): see :class:`ObstaclePenalty`.
+        self.penalty: ObstaclePenalty | None = None
+        #: Whether the obstacles enter the solve (False: after the step only,
+        #: as the explicit integrators have them).
+        self.contact_in_step = True
+
+    def held_contacts(self, x: np.ndarray, t: float) -> list:
+        if self.penalty is None:
+            return []
+        return self.penalty.held(x, t)
 
     def stable_dt(self, model: Model, state: State, control: Control) -> float:
         return float("inf")  # the converged step is backward Euler's: A-stable
@@ -124,6 +141,7 @@ class BackwardEuler(Integrator):
         dt: float,
         guess: np.ndarray,
         t: float,
+        end_time: float | None = None,
     ) -> np.ndarray:
         """The end positions ``x'`` (m, ``(N, 3)``) of the implicit equation
         ``x' = x + dt v + dt^2 M^-1 F(x', (x' - x) / dt)``, by Newton from
@@ -132,14 +150,21 @@ class BackwardEuler(Integrator):
         Backward Euler's step of length ``dt`` takes ``x``, ``v`` from the
         start of the step; BDF2 (:mod:`~pvcloth.physics.integrators.bdf2`)
         has the same equation with its combinations of the last two steps
-        for ``x``, ``v`` and two thirds of its step for ``dt``. ``t`` (s) only names the step in
-        the error raised when Newton does not converge."""
+        for ``x``, ``v`` and two thirds of its step for ``dt``. ``t`` (s) is
+        the step's start (it names the step in the error raised when Newton
+        does not converge); ``end_time`` (s, ``t + dt`` if not given) where
+        the obstacles are met (:class:`ObstaclePenalty`)."""
         table = model.spring_table()
         # The pattern depends only on the springs' ends, which never change
         # for a model: kept until another model comes.
         if self._pattern is None or self._pattern[0] != model.serial:
             self._pattern = (model.serial, BlockPattern(table.a, table.b, model.n_points))
-        potential = _StepPotential(model, x, v, dt, control.inv_mass, self._pattern[1])
+        end_time = t + dt if end_time is None else end_time
+        penalty = None
+        if self.contact_in_step:
+            penalty = ObstaclePenalty.build(model, control, x, dt, guess, end_time)
+        potential = _StepPotential(model, x, v, dt, control.inv_mass, self._pattern[1], penalty)
+        self.penalty = penalty
         potential.anchor(guess)
         residual = potential.residual(guess)
         size = np.abs(residual).max() / dt**2
@@ -194,8 +219,11 @@ class _StepPotential:
     its value, its gradient as a residual, its Hessian factorised, and the
     line search along a Newton direction."""
 
-    def __init__(self, model: Model, x, v, dt: float, inv_mass, pattern: BlockPattern):
+    def __init__(
+        self, model: Model, x, v, dt: float, inv_mass, pattern: BlockPattern, penalty=None
+    ):
         table = model.spring_table()
+        self.penalty = penalty  # ObstaclePenalty or None
         self.model, self.x, self.dt, self.inv_mass, self.pattern = model, x, dt, inv_mass, pattern
         self.a, self.b = table.a, table.b
         self.drift = x + dt * v  # (N, 3) m
@@ -247,7 +275,8 @@ class _StepPotential:
         bending = 0.0
         if self.bending is not None:  # x'Qx/2 - t'Qt/2 = (x - t)'Q(x + t)/2, Q symmetric
             bending = 0.5 * float(np.vdot(move, self.bending @ (trial + t)))
-        return inertia + air + springs + bending - float(np.vdot(self.constant, move))
+        contact = 0.0 if self.penalty is None else self.penalty.change(t, trial)
+        return inertia + air + springs + bending + contact - float(np.vdot(self.constant, move))
 
     def residual(self, t: np.ndarray) -> np.ndarray:
         """``r(t) = h^2 M^-1 grad Psi`` ``(N, 3)`` in metres, zero at pinned
@@ -260,6 +289,8 @@ class _StepPotential:
         force = self.constant - (self.rate / dt * mass)[:, None] * (t - self.x)
         if self.bending is not None:
             force -= self.bending @ t
+        if self.penalty is not None:
+            self.penalty.add_force(t, force)
         n = t.shape[0]
         for axis in range(3):
             force[:, axis] += np.bincount(self.a, on_a[:, axis], minlength=n)
@@ -277,6 +308,8 @@ class _StepPotential:
         dfdx = self.pattern.assemble(blocks)
         if self.bending is not None:
             dfdx = dfdx - self.model.bending_hessian()
+        if self.penalty is not None:
+            dfdx = dfdx - self.penalty.hessian(t)
         free = np.repeat(~pinned, 3)
         diagonal = np.repeat(mass * (1.0 + self.rate * dt), 3)
         return (sp.diags(diagonal) - dt * dt * dfdx).tocsr()[free][:, free]
@@ -337,3 +370,135 @@ class _StepPotential:
                 return trial
             alpha /= 2
         return None
+
+
+#: The penalty's stiffness per point, times ``h^2 / m``: a point resting on
+#: an obstacle under its weight sinks ``g h^2 / PENALTY`` into the penalty's
+#: layer (27 um at a 1/60 s step).
+PENALTY = 100.0
+#: Where the penalty starts, as a share of the obstacle's thickness: a point
+#: at rest under its weight stays outside the grown shape, where the
+#: response after the step leaves it alone.
+PENALTY_LAYER = 0.25
+#: Points whose gap at the start is under this many times the step's
+#: largest inertial move (plus the thickness) are watched.
+PENALTY_REACH = 4.0
+
+
+class ObstaclePenalty:
+    """The obstacles inside Newton's solve: a one-sided quadratic penalty in
+    the step's incremental potential (backward Euler's and BDF2's).
+
+    For a point ``i`` and an obstacle, ``E = k_i / 2 min(g_i - d, 0)^2``
+    with ``g_i`` its gap to the obstacle grown by its thickness ``T``,
+    ``d = PENALTY_LAYER T`` and ``k_i = PENALTY m_i / h^2``: the penalty acts
+    within the outer quarter of the thickness, and scaled by the mass over
+    the step squared, it adds ``PENALTY`` times a point's mass to Newton's
+    matrix where it acts, whatever the step (well conditioned), and a point
+    at rest under its weight sinks ``g h^2 / PENALTY`` into it. Its gradient
+    and its Hessian's ``k n n^T`` join the potential's (the curvature of a
+    sphere's gap, a small negative term, is left out: Newton stays a descent
+    method). Friction is not in the potential: the solve reports each
+    held point's normal impulse (:meth:`held`) and the response after the
+    step applies Coulomb's law with it
+    (:meth:`~pvcloth.physics.obstacles.Obstacle.collide`), which on a slope
+    sticks below the friction angle and slides at the Coulomb rate.
+
+    Parameters
+    ----------
+    obstacles : list of Obstacle
+    rows : list of numpy.ndarray
+        Per obstacle, the points watched.
+    stiffness : list of numpy.ndarray
+        Per obstacle, ``k_i`` of its rows (N/m).
+    dt : float
+        The potential's step (s).
+    end_time : float
+        Where the obstacles are met (s).
+    mass : numpy.ndarray
+        The points' masses (kg), shape (N,).
+    """
+
+    def __init__(self, obstacles, rows, stiffness, dt: float, end_time: float, mass):
+        self.obstacles, self.rows, self.stiffness = obstacles, rows, stiffness
+        self.dt, self.end_time, self.mass = dt, end_time, mass
+        self.layers = [PENALTY_LAYER * o.thickness for o in obstacles]
+
+    @classmethod
+    def build(cls, model, control, x, dt: float, guess, end_time: float):
+        """The penalty for a solve from ``x`` (m) whose first iterate is
+        ``guess``, or None (no obstacles; self-collision, which meets the
+        layers after the step: a floor in the solve would bear the lowest
+        layer's weight alone)."""
+        if not model.obstacles or model.self_collision is not None:
+            return None
+        movable = control.movable_index
+        reach = PENALTY_REACH * float(np.sqrt(((guess - x) ** 2).sum(axis=1).max(initial=0.0)))
+        rows, stiffness = [], []
+        for obstacle in model.obstacles:
+            gap, _ = obstacle.gap(x[movable], end_time)
+            watched = movable[gap < reach + obstacle.thickness]
+            rows.append(watched)
+            stiffness.append(PENALTY * model.mass[watched] / dt**2)
+        return cls(model.obstacles, rows, stiffness, dt, end_time, model.mass)
+
+    def _depths(self, k: int, t: np.ndarray):
+        """``(min(g - d, 0), normal)`` of obstacle ``k``'s rows at ``t``."""
+        gap, normal = self.obstacles[k].gap(t[self.rows[k]], self.end_time)
+        return np.minimum(gap - self.layers[k], 0.0), normal
+
+    def change(self, t: np.ndarray, trial: np.ndarray) -> float:
+        """The penalty's ``E(trial) - E(t)`` (J)."""
+        total = 0.0
+        for k in range(len(self.obstacles)):
+            if self.rows[k].size:
+                a, _ = self._depths(k, trial)
+                b, _ = self._depths(k, t)
+                total += 0.5 * float(self.stiffness[k] @ ((a - b) * (a + b)))
+        return total
+
+    def add_force(self, t: np.ndarray, force: np.ndarray) -> None:
+        """Add the penalty's force at ``t`` (N, outward) into ``force``."""
+        for k in range(len(self.obstacles)):
+            if self.rows[k].size:
+                depth, normal = self._depths(k, t)
+                force[self.rows[k]] -= (self.stiffness[k] * depth)[:, None] * normal
+
+    def hessian(self, t: np.ndarray) -> sp.csr_matrix:
+        """``k n n^T`` per pressed point, ``(3N, 3N)`` (N/m)."""
+        size = 3 * self.mass.size
+        blocks, cells = [], []
+        for k in range(len(self.obstacles)):
+            if self.rows[k].size:
+                depth, normal = self._depths(k, t)
+                pressed = depth < 0.0
+                if pressed.any():
+                    n = normal[pressed]
+                    blocks.append(
+                        self.stiffness[k][pressed, None, None] * n[:, :, None] * n[:, None, :]
+                    )
+                    cells.append(self.rows[k][pressed])
+        if not blocks:
+            return sp.csr_matrix((size, size))
+        block = np.concatenate(blocks)
+        point = np.concatenate(cells)
+        rows = (3 * point[:, None, None] + np.arange(3)[None, :, None]).repeat(3, axis=2)
+        cols = (3 * point[:, None, None] + np.arange(3)[None, None, :]).repeat(3, axis=1)
+        return sp.csr_matrix((block.ravel(), (rows.ravel(), cols.ravel())), shape=(size, size))
+
+    def held(self, x: np.ndarray, t: float) -> list:
+        """The points the penalty pushes on at ``x`` (m), one
+        :class:`~pvcloth.physics.obstacles.Contacts` per obstacle with their
+        normals, the normal impulse per unit mass the push gave them over
+        the step (m/s: ``h k |depth| / m``) and the potential's step ``h`` as
+        the lever of a change of velocity, for friction after the step."""
+        held = []
+        for k, obstacle in enumerate(self.obstacles):
+            rows = self.rows[k]
+            gap, normal = obstacle.gap(x[rows], t)
+            depth = np.minimum(gap - self.layers[k], 0.0)
+            pressed = depth < 0.0
+            index = rows[pressed]
+            impulse = self.dt * self.stiffness[k][pressed] * -depth[pressed] / self.mass[index]
+            held.append(Contacts(index, normal[pressed], impulse, self.dt))
+        return held
