@@ -23,6 +23,7 @@ ROOT = Path(__file__).resolve().parent.parent
 RUNS = {
     "accelerators.py": ([], "accelerators.md"),
     "adaptive.py": ([], "adaptive.md"),
+    "contact_convergence.py": ([], "contact_convergence.md"),
     "contact_in_step.py": ([], "contact_in_step.md"),
     "bending_cost.py": ([], "bending_cost.md"),
     "bending_models.py": ([], "bending_models.md"),

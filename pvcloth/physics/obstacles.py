@@ -192,8 +192,7 @@ class Obstacle:
 
     def _hold(self, x1, v1, held: Contacts, t0: float, t1: float) -> None:
         """Coulomb friction on the points a solve's penalty pushed on, with
-        its normal impulse per unit mass: the approach it left (the penalty
-        lets a point sink a little) removed too."""
+        its normal impulse per unit mass."""
         dt = max(t1 - t0, TINY)
         obstacle_velocity = (self.center_at(t1) - self.center_at(t0)) / dt
         slowed = self._respond(v1, held.index, held.normal, obstacle_velocity, held.impulse)
@@ -203,15 +202,17 @@ class Obstacle:
         """Remove the approach velocity, apply friction; return the tangential
         velocity that friction removed. ``pushed`` (m/s per point) is a normal
         impulse per unit mass already in the velocities (a solve's penalty):
-        friction takes it with the approach removed."""
+        friction takes it, and the normal motion is left as the solve made it
+        (removing the approach there threw the error estimate of an adaptive
+        BDF2 run off at the first touch, at every step length)."""
         relative = v[index] - obstacle_velocity
-        approach = np.einsum("ij,ij->i", relative, normal)
-        into = approach < 0.0
-        dv_n = np.where(into, -approach, 0.0)  # normal impulse per unit mass
-        relative += dv_n[:, None] * normal
-        if pushed is not None:  # a solve's push, in the velocity already
-            dv_n = dv_n + pushed
-            into = into | (pushed > 0.0)
+        if pushed is None:
+            approach = np.einsum("ij,ij->i", relative, normal)
+            into = approach < 0.0
+            dv_n = np.where(into, -approach, 0.0)  # normal impulse per unit mass
+            relative += dv_n[:, None] * normal
+        else:  # a solve's push, in the velocity already: its normal motion is its own
+            dv_n, into = pushed, pushed > 0.0
         tangential = relative - np.einsum("ij,ij->i", relative, normal)[:, None] * normal
         speed = np.linalg.norm(tangential, axis=1)
         sticks = into & (speed <= self.static_friction * dv_n)

@@ -496,7 +496,17 @@ class Simulation(Clocks, LiveEdits, Pins):
         model.set_time(state.t)
         spare = self._spare
         with np.errstate(all="ignore"):
-            new = self.integrator.step(model, state, self.control, dt, out=spare)
+            try:
+                new = self.integrator.step(model, state, self.control, dt, out=spare)
+            except DivergenceError:
+                if self.controller is None:
+                    raise
+                # A solver that did not converge (Newton's) is a rejected
+                # step under error control: a shorter one converges in fewer
+                # iterations, down to solver.min_dt.
+                self.controller.step = dt
+                self.controller.judge(math.inf)
+                return False
             if self.controller is not None:
                 self.controller.step = dt
                 if not self.controller.judge(self.integrator.error):

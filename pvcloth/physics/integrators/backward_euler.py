@@ -372,14 +372,22 @@ class _StepPotential:
         return None
 
 
-#: The penalty's stiffness per point, times ``h^2 / m``: a point resting on
-#: an obstacle under its weight sinks ``g h^2 / PENALTY`` into the penalty's
-#: layer (27 um at a 1/60 s step).
-PENALTY = 100.0
+#: ``omega`` (rad/s): the penalty's stiffness per point over its mass is
+#: ``omega^2`` at the depth scale. A point arriving at speed ``v`` stops
+#: within the layer ``l`` while ``v < omega l / sqrt(1.5)``: 6 m/s for a
+#: 1 cm thickness, 3 m/s for 5 mm (at 600 rad/s a cloth dropped 9 cm onto a
+#: sphere went through it, and the response after the step, removing the
+#: approach, threw an adaptive run's error estimate off at every step
+#: length). Fixed, not scaled with the step: a stiffness of ``100 m / h^2``
+#: made the model change with the step, and where an adaptive run shortened
+#: it, a point left deep by a long step was thrown out by a far stiffer one.
+PENALTY_FREQUENCY = 3000.0
 #: Where the penalty starts, as a share of the obstacle's thickness: a point
 #: at rest under its weight stays outside the grown shape, where the
 #: response after the step leaves it alone.
 PENALTY_LAYER = 0.25
+#: The smallest depth scale (m) of the cubic penalty (see :class:`ObstaclePenalty`).
+PENALTY_SCALE = 1e-3
 #: Points whose gap at the start is under this many times the step's
 #: largest inertial move (plus the thickness) are watched.
 PENALTY_REACH = 4.0
@@ -389,20 +397,25 @@ class ObstaclePenalty:
     """The obstacles inside Newton's solve: a one-sided quadratic penalty in
     the step's incremental potential (backward Euler's and BDF2's).
 
-    For a point ``i`` and an obstacle, ``E = k_i / 2 min(g_i - d, 0)^2``
-    with ``g_i`` its gap to the obstacle grown by its thickness ``T``,
-    ``d = PENALTY_LAYER T`` and ``k_i = PENALTY m_i / h^2``: the penalty acts
-    within the outer quarter of the thickness, and scaled by the mass over
-    the step squared, it adds ``PENALTY`` times a point's mass to Newton's
-    matrix where it acts, whatever the step (well conditioned), and a point
-    at rest under its weight sinks ``g h^2 / PENALTY`` into it. Its gradient
-    and its Hessian's ``k n n^T`` join the potential's (the curvature of a
-    sphere's gap, a small negative term, is left out: Newton stays a descent
-    method). Friction is not in the potential: the solve reports each
-    held point's normal impulse (:meth:`held`) and the response after the
-    step applies Coulomb's law with it
-    (:meth:`~pvcloth.physics.obstacles.Obstacle.collide`), which on a slope
-    sticks below the friction angle and slides at the Coulomb rate.
+    For a point ``i`` and an obstacle, ``E = k_i D_i^3 / (3 l)`` with the
+    depth ``D_i = max(d - g_i, 0)`` into a layer ``d = PENALTY_LAYER T`` over
+    the obstacle grown by its thickness ``T`` (``g_i`` the point's gap to it),
+    ``l = max(d, PENALTY_SCALE)`` and ``k_i = m_i omega^2`` (``omega`` is
+    :data:`PENALTY_FREQUENCY`). Cubic, so that its force ``k D^2 / l`` and
+    the force's slope both start from zero: a quadratic penalty's force
+    switched on with a kink, which BDF2's error estimate (from the third
+    derivative) saw at every step length, and an adaptive run's steps fell
+    to a nanosecond where a point first entered the layer. A point at rest
+    under its weight sinks ``sqrt(g l) / omega`` (37 um in a 1.25 mm
+    layer) into it, outside the grown shape, where the response after the
+    step leaves it. The model does not depend on the step, so smaller steps
+    converge to it. Its gradient and its Hessian's ``2 k D / l n n^T`` join
+    the potential's (the curvature of a sphere's gap, a small negative term,
+    is left out: Newton stays a descent method). Friction is not in the
+    potential: the solve reports each held point's normal impulse
+    (:meth:`held`) and the response after the step applies Coulomb's law
+    with it (:meth:`~pvcloth.physics.obstacles.Obstacle._hold`), which on a
+    slope sticks below the friction angle and slides at the Coulomb rate.
 
     Parameters
     ----------
@@ -423,6 +436,9 @@ class ObstaclePenalty:
         self.obstacles, self.rows, self.stiffness = obstacles, rows, stiffness
         self.dt, self.end_time, self.mass = dt, end_time, mass
         self.layers = [PENALTY_LAYER * o.thickness for o in obstacles]
+        #: The depth (m) at which the cubic penalty is as stiff as
+        #: ``m omega^2``: the layer, or a millimetre for a thin one.
+        self.scales = [max(layer, PENALTY_SCALE) for layer in self.layers]
 
     @classmethod
     def build(cls, model, control, x, dt: float, guess, end_time: float):
@@ -439,44 +455,48 @@ class ObstaclePenalty:
             gap, _ = obstacle.gap(x[movable], end_time)
             watched = movable[gap < reach + obstacle.thickness]
             rows.append(watched)
-            stiffness.append(PENALTY * model.mass[watched] / dt**2)
+            stiffness.append(PENALTY_FREQUENCY**2 * model.mass[watched])
         return cls(model.obstacles, rows, stiffness, dt, end_time, model.mass)
 
     def _depths(self, k: int, t: np.ndarray):
-        """``(min(g - d, 0), normal)`` of obstacle ``k``'s rows at ``t``."""
+        """``(depth, normal)`` of obstacle ``k``'s rows at ``t``: how far
+        each is into the penalty's layer (m, ``max(d - g, 0)``)."""
         gap, normal = self.obstacles[k].gap(t[self.rows[k]], self.end_time)
-        return np.minimum(gap - self.layers[k], 0.0), normal
+        return np.maximum(self.layers[k] - gap, 0.0), normal
 
     def change(self, t: np.ndarray, trial: np.ndarray) -> float:
-        """The penalty's ``E(trial) - E(t)`` (J)."""
+        """The penalty's ``E(trial) - E(t)`` (J), from the difference of cubes."""
         total = 0.0
         for k in range(len(self.obstacles)):
             if self.rows[k].size:
                 a, _ = self._depths(k, trial)
                 b, _ = self._depths(k, t)
-                total += 0.5 * float(self.stiffness[k] @ ((a - b) * (a + b)))
+                total += float(self.stiffness[k] @ ((a - b) * (a * a + a * b + b * b))) / (
+                    3 * self.scales[k]
+                )
         return total
 
     def add_force(self, t: np.ndarray, force: np.ndarray) -> None:
-        """Add the penalty's force at ``t`` (N, outward) into ``force``."""
+        """Add the penalty's force at ``t`` (N, outward: ``k d^2 / l``) into ``force``."""
         for k in range(len(self.obstacles)):
             if self.rows[k].size:
                 depth, normal = self._depths(k, t)
-                force[self.rows[k]] -= (self.stiffness[k] * depth)[:, None] * normal
+                push = self.stiffness[k] * depth**2 / self.scales[k]
+                force[self.rows[k]] += push[:, None] * normal
 
     def hessian(self, t: np.ndarray) -> sp.csr_matrix:
-        """``k n n^T`` per pressed point, ``(3N, 3N)`` (N/m)."""
+        """``2 k d / l n n^T`` per pressed point, ``(3N, 3N)`` (N/m)."""
         size = 3 * self.mass.size
         blocks, cells = [], []
         for k in range(len(self.obstacles)):
             if self.rows[k].size:
                 depth, normal = self._depths(k, t)
-                pressed = depth < 0.0
+                pressed = depth > 0.0
                 if pressed.any():
                     n = normal[pressed]
-                    blocks.append(
-                        self.stiffness[k][pressed, None, None] * n[:, :, None] * n[:, None, :]
-                    )
+                    outer = n[:, :, None] * n[:, None, :]
+                    curve = 2 * self.stiffness[k][pressed] * depth[pressed] / self.scales[k]
+                    blocks.append(curve[:, None, None] * outer)
                     cells.append(self.rows[k][pressed])
         if not blocks:
             return sp.csr_matrix((size, size))
@@ -490,15 +510,16 @@ class ObstaclePenalty:
         """The points the penalty pushes on at ``x`` (m), one
         :class:`~pvcloth.physics.obstacles.Contacts` per obstacle with their
         normals, the normal impulse per unit mass the push gave them over
-        the step (m/s: ``h k |depth| / m``) and the potential's step ``h`` as
+        the step (m/s: ``h k D^2 / (l m)``) and the potential's step ``h`` as
         the lever of a change of velocity, for friction after the step."""
         held = []
         for k, obstacle in enumerate(self.obstacles):
             rows = self.rows[k]
             gap, normal = obstacle.gap(x[rows], t)
-            depth = np.minimum(gap - self.layers[k], 0.0)
-            pressed = depth < 0.0
+            depth = np.maximum(self.layers[k] - gap, 0.0)
+            pressed = depth > 0.0
             index = rows[pressed]
-            impulse = self.dt * self.stiffness[k][pressed] * -depth[pressed] / self.mass[index]
+            push = self.stiffness[k][pressed] * depth[pressed] ** 2 / self.scales[k]
+            impulse = self.dt * push / self.mass[index]
             held.append(Contacts(index, normal[pressed], impulse, self.dt))
         return held
