@@ -154,6 +154,9 @@ class StepController:
     shortest: float = math.inf
     longest: float = 0.0
     _after_rejection: bool = False
+    #: The integrator's own error on the last step it could not take (a
+    #: Newton solve that did not converge), or empty.
+    failure: str = ""
 
     def judge(self, error: float) -> bool:
         """Whether a step of :attr:`step` with this error estimate is

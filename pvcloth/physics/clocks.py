@@ -166,6 +166,7 @@ class Clocks:
                         f"fallen to {control.step:.3g} s. A blow-up, or a tolerance too tight "
                         f"for this cloth: loosen solver.tolerance, lower solver.min_dt, or "
                         f"try an implicit integrator"
+                        + (f" (its last failure: {control.failure})" if control.failure else "")
                     )
                 natural = control.step
                 remaining = end - self._state.t
@@ -181,8 +182,10 @@ class Clocks:
                     if h < natural:
                         # Cut short to land on the end, not for its error:
                         # the next advance starts from the step the controller
-                        # wanted (else every frame's end restarted it small).
-                        control.step = max(control.step, natural)
+                        # wanted (else every frame's end restarted it small),
+                        # no longer than its growth allows after this one
+                        # (BDF2 restarts beyond 2.4 times its last step).
+                        control.step = max(control.step, min(natural, control.grow * h))
                     self.dt = control.step
                     if on_step is not None:
                         on_step(self._state.t - start_time)

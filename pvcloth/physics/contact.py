@@ -44,15 +44,16 @@ starting each step from none settled to 5e-4 J).
 Chebyshev's extrapolation (``fast_mass_spring``'s default) is made for one
 linear iteration: the impulses are taken from the solve's own answer, the
 touching points are not extrapolated, and its recurrence starts again
-whenever the points in contact change; without that, 30 iterations threw a
+whenever the number of points in contact changes; without that, 30 iterations threw a
 cloth off a sphere. L-BFGS, whose line search knows only the energy, keeps
 the response after the step, and so does a scene with self-collision (its
 layers meet after the step, so a floor's impulse inside the solve would bear
 only the lowest layer's weight while the layers above drag it).
 
-Only points within reach of an obstacle take part: those whose gap at the
-start of the step is below :data:`REACH` times the largest move of the
-step's inertial guess, plus the obstacle's thickness. The response after the
+Only points within reach of an obstacle take part: those whose gap (to the
+obstacle at the start or the end of the step) is below :data:`REACH` times
+the largest move of the step's inertial guess (which holds gravity's),
+plus the obstacle's thickness. The response after the
 step (:class:`~pvcloth.physics.pipeline.ObstacleContacts`) stays, as the
 fail-safe that guarantees no point ends a step inside.
 """
@@ -134,7 +135,10 @@ class ObstacleContact:
         reach = REACH * float(np.sqrt(((guess - start) ** 2).sum(axis=1).max(initial=0.0)))
         self._rows, self._shapes = [], []
         for obstacle in self.obstacles:
-            gap, _ = obstacle.gap(start[movable], t0)
+            # At both ends of the step: a moving obstacle comes to the cloth.
+            gap = np.minimum(
+                obstacle.gap(start[movable], t0)[0], obstacle.gap(start[movable], t1)[0]
+            )
             self._rows.append(movable[gap < reach + obstacle.thickness])
             self._shapes.append(_shape(obstacle, t0, t1))
         return self.load

@@ -498,14 +498,15 @@ class Simulation(Clocks, LiveEdits, Pins):
         with np.errstate(all="ignore"):
             try:
                 new = self.integrator.step(model, state, self.control, dt, out=spare)
-            except DivergenceError:
+            except DivergenceError as error:
                 if self.controller is None:
                     raise
                 # A solver that did not converge (Newton's) is a rejected
                 # step under error control: a shorter one converges in fewer
-                # iterations, down to solver.min_dt.
+                # iterations, down to solver.min_dt (whose error quotes this).
                 self.controller.step = dt
                 self.controller.judge(math.inf)
+                self.controller.failure = str(error)
                 return False
             if self.controller is not None:
                 self.controller.step = dt

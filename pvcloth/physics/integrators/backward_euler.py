@@ -388,8 +388,9 @@ PENALTY_FREQUENCY = 3000.0
 PENALTY_LAYER = 0.25
 #: The smallest depth scale (m) of the cubic penalty (see :class:`ObstaclePenalty`).
 PENALTY_SCALE = 1e-3
-#: Points whose gap at the start is under this many times the step's
-#: largest inertial move (plus the thickness) are watched.
+#: Points whose gap at the step's end time is under this many times the
+#: step's largest inertial move and fall under gravity (plus the thickness)
+#: are watched.
 PENALTY_REACH = 4.0
 
 
@@ -449,7 +450,9 @@ class ObstaclePenalty:
         if not model.obstacles or model.self_collision is not None:
             return None
         movable = control.movable_index
-        reach = PENALTY_REACH * float(np.sqrt(((guess - x) ** 2).sum(axis=1).max(initial=0.0)))
+        move = float(np.sqrt(((guess - x) ** 2).sum(axis=1).max(initial=0.0)))
+        fall = dt * dt * float(np.linalg.norm(model.gravity.acceleration)) if model.gravity else 0.0
+        reach = PENALTY_REACH * (move + fall)
         rows, stiffness = [], []
         for obstacle in model.obstacles:
             gap, _ = obstacle.gap(x[movable], end_time)
