@@ -182,10 +182,13 @@ class Clocks:
                     if h < natural:
                         # Cut short to land on the end, not for its error:
                         # the next advance starts from the step the controller
-                        # wanted (else every frame's end restarted it small),
-                        # no longer than its growth allows after this one
-                        # (BDF2 restarts beyond 2.4 times its last step).
-                        control.step = max(control.step, min(natural, control.grow * h))
+                        # wanted (else every frame's end restarted it small);
+                        # for a method whose growth is bounded, no longer than
+                        # that allows (BDF2 restarts beyond 2.4 times its last).
+                        restored = natural
+                        if math.isfinite(self.integrator.max_step_growth):
+                            restored = min(natural, control.grow * h)
+                        control.step = max(control.step, restored)
                     self.dt = control.step
                     if on_step is not None:
                         on_step(self._state.t - start_time)
