@@ -474,6 +474,7 @@ class Simulation(Clocks, LiveEdits, Pins):
         )
         if self.controller is not None:
             self.dt = self.controller.step
+        self.integrator.set_error_control(self.controller is not None)
 
     def _resolve_auto(self, scene: Scene) -> Scene:
         """``scene`` with ``solver.integrator = "auto"`` replaced by the

@@ -150,6 +150,11 @@ class Integrator(ABC):
         method starts again from the new state alone. Nothing, by default."""
         return None
 
+    def set_error_control(self, on: bool) -> None:
+        """Told whether a step controller chooses its steps (``solver.tolerance``:
+        :class:`~pvcloth.physics.adaptive.StepController`); nothing changes
+        here."""
+
     def held_contacts(self, x: np.ndarray, t: float) -> list:
         """The points its last step's own solve held against obstacles, as
         :class:`~pvcloth.physics.obstacles.Contacts` with the normals at
