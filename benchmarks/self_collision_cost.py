@@ -12,7 +12,7 @@ off, side by side in one run, on these states:
   the long cloth after ``--windy`` seconds of falling over the bar in the
   wind, still flapping. Costly to reach beyond 32x32 (minutes at 64x64).
 
-Each measured frame is ``sim.advance(1 / 60)``: one step of the scene's
+Each measured frame is ``sim.advance(1 / 60)``: one step of
 ``fast_mass_spring`` off, and on as many steps as the self-collision step
 bound needs (``Simulation.contact_step``: a resting layer must not fall
 further in one step than the response may move it back; 1/120 s from 64
@@ -28,7 +28,8 @@ self-collision runs after every one of them.
 
 Run:  python benchmarks/self_collision_cost.py [--sizes 32 64 128] [--steps 40]
       [--integrator symplectic_euler]
-      (writes benchmarks/results/self_collision_cost.md)
+      (writes benchmarks/results/self_collision_cost.md, with another
+      integrator benchmarks/results/self_collision_cost_INTEGRATOR.md)
 """
 
 from __future__ import annotations
@@ -118,8 +119,15 @@ def main() -> None:
     parser.add_argument(
         "--integrator", default="fast_mass_spring", help="the integrator timed (its automatic step)"
     )
-    parser.add_argument("--out", default=str(HERE / "results" / "self_collision_cost.md"))
+    parser.add_argument(
+        "--out",
+        help="the results file (default benchmarks/results/self_collision_cost.md, with "
+        "another integrator self_collision_cost_INTEGRATOR.md)",
+    )
     args = parser.parse_args()
+    if args.out is None:
+        named = "" if args.integrator == "fast_mass_spring" else f"_{args.integrator}"
+        args.out = str(HERE / "results" / f"self_collision_cost{named}.md")
     rows = []
     for n in args.sizes:
         for name, scene, start in starts(n, args.settle, args.windy, args.cases):

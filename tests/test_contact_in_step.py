@@ -185,16 +185,20 @@ def test_the_compiled_projection_is_the_numpy_one(spec):
     friction = rng.normal(0.0, 1e-6, (n, 3))
     shape = _shape(build_obstacle(spec), 0.0, 0.01)
     rows = np.arange(0, n, 2)
-    results = []
-    for kernel in (_project_numpy, _project_compiled):
-        arrays = [a.copy() for a in (iterate, normal, friction)]
-        load = np.zeros((n, 3))
-        kernel(rows, arrays[0], plain, True, start, mass, arrays[1], arrays[2], *shape,
-               spec.static_friction, spec.friction, load)  # fmt: skip
-        results.append((*arrays, load))
-    for numpy_side, compiled_side in zip(*results, strict=True):
-        np.testing.assert_allclose(compiled_side, numpy_side, rtol=1e-12, atol=1e-15)
-    assert not np.array_equal(results[0][0], iterate)  # it did move points
+    # With Chebyshev's plain answer as the source (touching points reset to
+    # it), and without (the iterate its own source, as plain iterations run).
+    for reset in (True, False):
+        results = []
+        for kernel in (_project_numpy, _project_compiled):
+            arrays = [a.copy() for a in (iterate, normal, friction)]
+            source = plain if reset else arrays[0]
+            load = np.zeros((n, 3))
+            kernel(rows, arrays[0], source, reset, start, mass, arrays[1], arrays[2], *shape,
+                   spec.static_friction, spec.friction, load)  # fmt: skip
+            results.append((*arrays, load))
+        for numpy_side, compiled_side in zip(*results, strict=True):
+            np.testing.assert_allclose(compiled_side, numpy_side, rtol=1e-12, atol=1e-15)
+        assert not np.array_equal(results[0][0], iterate)  # it did move points
 
 
 def test_a_checkpoint_resumes_a_contact_run_bit_for_bit(tmp_path):
@@ -214,19 +218,32 @@ def test_a_checkpoint_resumes_a_contact_run_bit_for_bit(tmp_path):
 def test_under_error_control_the_fast_solve_leaves_contact_after_the_step(integrator):
     """An inelastic impulse is a jump in velocity that no step resolves: with
     the obstacles inside the solve, the error estimate rejected every step
-    at the first touch, down to solver.min_dt (a 12x12 cloth dropped on the
-    ground stopped at 0.36 s). Under a tolerance the fast solve leaves
-    contact to the response after the step, and the drop lands; without
-    one, the same integrator takes contact into its solve."""
+    at the first touch, down to solver.min_dt (the 12x12 cloth of ground.toml
+    stopped at 0.36 s). Under a tolerance the fast solve leaves contact to
+    the response after the step, and the cloth (held by two corners) swings
+    down onto the ground; without one, the same integrator takes contact
+    into its solve; a tolerance set or taken away live switches it."""
     scene = pvcloth.load_scene(SCENES / "ground.toml").with_resolution(8)
     scene = scene.with_overrides(
         {"solver.integrator": integrator, "cloth.center": [0.0, 0.0, 0.1], "solver.dt": None}
     )
     adaptive = Simulation(scene.with_overrides({"solver.tolerance": 0.1}))
-    adaptive.advance(0.3)  # lands at about 0.13 s
     ground = adaptive.model.obstacles[0]
-    assert ground.gap(adaptive.positions, adaptive.time)[0].min() > -1e-12
+    closest = np.inf
+    while adaptive.time < 0.3:  # it reaches the ground at about 0.13 s
+        adaptive.advance(1 / 60)
+        gaps = ground.gap(adaptive.positions, adaptive.time)[0]
+        assert gaps.min() > -1e-12
+        closest = min(closest, gaps.min())
+    assert closest < 1e-6  # it lies on the ground, held by the response
     assert adaptive.integrator.contact is None  # never inside the solve
     fixed = Simulation(scene)
     fixed.advance(0.3)
     assert fixed.integrator.contact.touching > 0
+    # Live: a tolerance set takes contact out of the solve, taken away puts it back.
+    fixed.update({"solver.tolerance": 0.1})
+    fixed.advance(1 / 60)
+    assert fixed.integrator.held_contacts(fixed.positions, fixed.time) == []
+    fixed.update({"solver.tolerance": None})
+    fixed.advance(1 / 60)
+    assert fixed.integrator.held_contacts(fixed.positions, fixed.time) != []

@@ -48,7 +48,9 @@ whenever the number of points in contact changes; without that, 30 iterations th
 cloth off a sphere. L-BFGS, whose line search knows only the energy, keeps
 the response after the step, and so does a scene with self-collision (its
 layers meet after the step, so a floor's impulse inside the solve would bear
-only the lowest layer's weight while the layers above drag it).
+only the lowest layer's weight while the layers above drag it), and so does
+a run under error control
+(:meth:`~pvcloth.physics.integrators.fast_mass_spring.FastMassSpring.set_error_control`).
 
 Only points within reach of an obstacle take part: those whose gap (to the
 obstacle at the start or the end of the step) is below :data:`REACH` times

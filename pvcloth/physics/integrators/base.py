@@ -154,6 +154,7 @@ class Integrator(ABC):
         """Told whether a step controller chooses its steps (``solver.tolerance``:
         :class:`~pvcloth.physics.adaptive.StepController`); nothing changes
         here."""
+        return None
 
     def held_contacts(self, x: np.ndarray, t: float) -> list:
         """The points its last step's own solve held against obstacles, as
