@@ -383,6 +383,29 @@ def test_bad_adaptive_settings_are_named(changes, message):
         Simulation(hanging(8).with_overrides({"solver.integrator": "rk23", **changes}))
 
 
+def test_a_solver_that_never_converges_stops_with_its_own_reason(monkeypatch):
+    # Under a tolerance a step whose solve fails is a rejected step, retried
+    # shorter: when even solver.min_dt fails, the error quotes the solver's
+    # last failure, the reason the steps fell.
+    sim = Simulation(
+        hanging(8).with_overrides(
+            {"solver.integrator": "backward_euler", "solver.tolerance": 1e-3, "solver.min_dt": 1e-4}
+        )
+    )
+    start = sim.positions.copy()
+
+    def never(*args, **kwargs):
+        raise pvcloth.DivergenceError("Newton's method left 3 m/s^2 unbalanced (a test)")
+
+    monkeypatch.setattr(sim.integrator, "step", never)
+    with pytest.raises(
+        pvcloth.DivergenceError,
+        match=r"solver\.min_dt.*its last failure: Newton's method left 3 m/s\^2 unbalanced",
+    ):
+        sim.advance(0.1)
+    assert sim.time == 0.0 and np.array_equal(sim.positions, start)
+
+
 def test_a_tolerance_out_of_reach_stops_with_what_to_change():
     sim = adaptive(hanging(8), 1e-12, **{"solver.min_dt": 1e-5})
     with pytest.raises(pvcloth.DivergenceError, match=r"solver\.min_dt.*loosen solver\.tolerance"):
