@@ -430,11 +430,11 @@ class ObstaclePenalty:
     steps converge to it (its dashpot's cap does, below). Its gradient and
     its Hessian's ``2 k D / l n n^T`` join the potential's (the curvature
     of a sphere's gap, a small negative term, is left out: Newton stays a
-    descent method). Friction is not in the
-    potential: the solve reports each held point's normal impulse
-    (:meth:`held`) and the response after the step applies Coulomb's law
-    with it (:meth:`~pvcloth.physics.obstacles.Obstacle._hold`), which on a
-    slope sticks below the friction angle and slides at the Coulomb rate.
+    descent method). Friction is not in the potential: the solve reports
+    each held point's normal impulse (:meth:`held`) and the response after
+    the step applies Coulomb's law with it
+    (:meth:`~pvcloth.physics.obstacles.Obstacle._hold`), which on a slope
+    sticks below the friction angle and slides at the Coulomb rate.
 
     The penalty alone is elastic: a point landing in the layer is thrown
     back once the steps are short enough to follow the landing (about
@@ -517,14 +517,10 @@ class ObstaclePenalty:
             stiffness.append(PENALTY_FREQUENCY**2 * model.mass[watched])
         return cls(model.obstacles, rows, stiffness, dt, end_time, model.mass, x)
 
-    def _depths(self, k: int, t: np.ndarray):
-        """``(depth, normal)`` of obstacle ``k``'s rows at ``t``: how far
-        each is into the penalty's layer (m, ``max(d - g, 0)``)."""
-        gap, normal = self.obstacles[k].gap(t[self.rows[k]], self.end_time)
-        return np.maximum(self.layers[k] - gap, 0.0), normal
-
     def _gaps(self, k: int, t: np.ndarray):
-        """``(depth, gap, normal)`` of obstacle ``k``'s rows at ``t``."""
+        """``(depth, gap, normal)`` of obstacle ``k``'s rows at ``t``: how
+        far each is into the penalty's layer (m, ``max(d - g, 0)``), its gap
+        ``g`` (m) and the outward normal."""
         gap, normal = self.obstacles[k].gap(t[self.rows[k]], self.end_time)
         return np.maximum(self.layers[k] - gap, 0.0), gap, normal
 
@@ -560,7 +556,7 @@ class ObstaclePenalty:
         blocks, cells = [], []
         for k in range(len(self.obstacles)):
             if self.rows[k].size:
-                depth, normal = self._depths(k, t)
+                depth, _, normal = self._gaps(k, t)
                 curve = 2 * self.stiffness[k] * depth / self.scales[k] + self.damping[k] / self.dt
                 pressed = curve > 0.0
                 if pressed.any():
