@@ -18,6 +18,15 @@ estimates.
   within a factor of 10; a run whose steps fell under ``solver.min_dt`` says
   where it stopped.
 
+``--size``, ``--halvings``, ``--finer`` (the reference's step, in halvings
+below the finest fixed one) and ``--tolerances`` change the cloth, the steps
+and the tolerances: a 6x6 cloth is cheap enough for a reference at
+1/122880 s, and so for tolerances down to 1e-5 m
+(``--size 6 --halvings 9 --finer 3 --tolerances 1e-2 1e-3 1e-4 1e-5
+--out benchmarks/results/contact_convergence_6.md``). Newton's iterations
+may stop short of their tolerance at the finest steps (round-off in the
+step's potential): the table says so.
+
 Writes ``benchmarks/results/contact_convergence.md``.
 """
 
@@ -25,6 +34,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import sys
 import time
 from pathlib import Path
 
@@ -38,18 +48,17 @@ from pvcloth.physics.reference import rms_distance
 from pvcloth.physics.simulation import Simulation
 
 HERE = Path(__file__).parent
-N = 6 if SMOKE else 16
+N = 6 if SMOKE else 16  # points a side (--size)
 AT = 0.05 if SMOKE else 0.2  # s
-#: Fixed steps: 1/60 s and the halvings below it, this many in all.
+#: Fixed steps: 1/60 s and the halvings below it, this many in all (--halvings).
 HALVINGS = 2 if SMOKE else 6
-REFERENCE = 1 / (60 * 2 ** (HALVINGS + 1))
-TOLERANCES = (1e-2, 1e-3) if SMOKE else (1e-2, 1e-3, 1e-4)
+TOLERANCES = (1e-2, 1e-3) if SMOKE else (1e-2, 1e-3, 1e-4)  # m (--tolerances)
 SPHERE = ObstacleSpec("sphere", center=(0, 0, 0.25), radius=0.25, thickness=0.01)
 
 
-def scene(integrator: str, dt: float | None, tolerance: float | None = None):
+def scene(integrator: str, dt: float | None, tolerance: float | None = None, size: int = N):
     base = pvcloth.load_scene(HERE.parent / "data" / "scenes" / "cotton.toml")
-    base = base.with_resolution(N).with_overrides(
+    base = base.with_resolution(size).with_overrides(
         {
             "solver.integrator": integrator,
             "solver.dt": dt,
@@ -63,9 +72,9 @@ def scene(integrator: str, dt: float | None, tolerance: float | None = None):
     return dataclasses.replace(base, cloth=cloth, obstacles=(SPHERE,))
 
 
-def run(integrator: str, dt: float | None, inside: bool = True, tolerance=None):
+def run(integrator: str, dt: float | None, inside: bool = True, tolerance=None, size: int = N):
     """``(positions at AT, wall seconds, steps)``."""
-    sim = Simulation(scene(integrator, dt, tolerance), stability="ignore")
+    sim = Simulation(scene(integrator, dt, tolerance, size), stability="ignore")
     sim.integrator.contact_in_step = inside
     begin = time.perf_counter()
     sim.advance(AT)
@@ -74,22 +83,48 @@ def run(integrator: str, dt: float | None, inside: bool = True, tolerance=None):
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--size", type=int, default=N, help="points a side")
+    parser.add_argument(
+        "--halvings", type=int, default=HALVINGS, help="fixed steps: 1/60 s and this many halvings"
+    )
+    parser.add_argument(
+        "--finer",
+        type=int,
+        default=2,
+        help="the reference's step: this many halvings below the finest fixed step",
+    )
+    parser.add_argument("--tolerances", type=float, nargs="+", default=TOLERANCES)
     parser.add_argument("--out", default=str(HERE / "results" / "contact_convergence.md"))
     args = parser.parse_args()
-    truth, wall, _ = run("bdf2", REFERENCE)
-    print(f"reference: bdf2 at 1/{round(1 / REFERENCE)} s, {wall:.0f} s", flush=True)
+    size = args.size
+    reference = 1 / (60 * 2 ** (args.halvings - 1 + args.finer))
+    truth, wall, _ = run("bdf2", reference, size=size)
+    print(f"reference: bdf2 at 1/{round(1 / reference)} s, {wall:.0f} s", flush=True)
     # The landings make every method first order (each point's is an event
     # inside a step): the reference is off by about its distance from the
     # run at twice its step.
-    coarser, _, _ = run("bdf2", 2 * REFERENCE)
-    own = rms_distance(coarser, truth)
-    steps = [1 / (60 * 2**k) for k in range(HALVINGS)]
+    for times in (2, 4, 8):  # Newton may stop at one of these steps (see above)
+        try:
+            coarser, _, _ = run("bdf2", times * reference, size=size)
+        except DivergenceError as error:
+            print(f"bdf2 at {times} times the reference's step: {error}", flush=True)
+        else:
+            break
+    else:
+        raise SystemExit("no coarser reference run converged: give another --finer")
+    own = rms_distance(coarser, truth) / (times - 1)  # first order: e(k h) = k e(h)
+    steps = [1 / (60 * 2**k) for k in range(args.halvings)]
     columns = [(name, inside) for name in ("backward_euler", "bdf2") for inside in (True, False)]
     errors = {column: [] for column in columns}
     for dt in steps:
         for name, inside in columns:
-            x, _, _ = run(name, dt, inside)
-            errors[(name, inside)].append(rms_distance(x, truth))
+            try:
+                x, _, _ = run(name, dt, inside, size=size)
+            except DivergenceError as error:  # Newton's round-off at the finest steps
+                print(f"{name} at 1/{round(1 / dt)} s: {error}", flush=True)
+                errors[(name, inside)].append(None)
+            else:
+                errors[(name, inside)].append(rms_distance(x, truth))
         print(f"1/{round(1 / dt)} s done", flush=True)
     head = " | ".join(f"{n} ({'inside' if i else 'after'})" for n, i in columns)
     lines = [
@@ -97,14 +132,15 @@ def main() -> None:
         "",
         provenance(),
         "",
-        f"`python benchmarks/contact_convergence.py`: {N}x{N} cotton, 0.6 m square, dropped "
+        f"`{' '.join(['python benchmarks/contact_convergence.py', *sys.argv[1:]])}`: "
+        f"{size}x{size} cotton, 0.6 m square, dropped "
         f"flat from 9 cm above a 0.25 m sphere; RMS distance of the points at {AT:g} s from "
-        f"`bdf2` with the obstacle inside its solve at 1/{round(1 / REFERENCE)} s (mm), and "
+        f"`bdf2` with the obstacle inside its solve at 1/{round(1 / reference)} s (mm), and "
         f"in brackets its ratio to the row above (2 is first order, 4 second). *inside*: "
         f"a penalty in Newton's potential; *after*: the response after the step alone. "
-        f"The reference is {1e3 * own:.3g} mm from the same run at twice its step: its own "
-        f"error is about that (first order, from the landings), and no error below it "
-        f"can be measured here.",
+        f"The reference's own error is about {1e3 * own:.3g} mm (its distance from the same "
+        f"run at {times} times its step, over {times - 1}: first order, from the landings), "
+        f"and no error below it can be measured here.",
         "",
         f"| step | {head} |",
         "|---|" + "---|" * len(columns),
@@ -112,8 +148,11 @@ def main() -> None:
     for row, dt in enumerate(steps):
         cells = []
         for column in columns:
-            error = errors[column][row]
-            ratio = f" ({errors[column][row - 1] / error:.2f})" if row else ""
+            error, above = errors[column][row], errors[column][row - 1] if row else None
+            if error is None:
+                cells.append("Newton stopped")
+                continue
+            ratio = f" ({above / error:.2f})" if above is not None else ""
             cells.append(f"{1e3 * error:.4g}{ratio}")
         lines.append(f"| 1/{round(1 / dt)} s | " + " | ".join(cells) + " |")
     lines += [
@@ -124,9 +163,9 @@ def main() -> None:
         "| tolerance (m) | error (mm) | error / (tolerance t) | steps | wall (s) |",
         "|---|---|---|---|---|",
     ]
-    for tolerance in TOLERANCES:
+    for tolerance in args.tolerances:
         try:
-            x, wall, taken = run("bdf2", None, True, tolerance)
+            x, wall, taken = run("bdf2", None, True, tolerance, size)
         except DivergenceError as error:
             stopped = str(error).split(":")[0]
             lines.append(f"| {tolerance:g} | {stopped} | | | |")

@@ -613,7 +613,11 @@ def test_a_folded_towel_at_rest_does_not_chatter(n):
 def test_friction_between_layers_holds_a_fold_on_a_slope():
     # The folded towel at rest, then the floor tilted by 14 degrees along the
     # fold line (gravity turned instead). tan 14 = 0.25: friction 0.3 between
-    # the layers holds the top half; with none it slides away.
+    # the layers holds the top half; with none it slides away, and the
+    # bottom half with it (0.25 m in 1 s, though the floor's static friction
+    # 0.7 holds a single layer there): the top half then pulls the bottom
+    # one only at the crease, and the floor's friction after the step, point
+    # by point, gives way where that pull is (a limit the guide states).
     import sys
 
     sys.path.insert(0, str(ROOT / "examples" / "03_self_collision"))
