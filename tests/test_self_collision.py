@@ -639,7 +639,7 @@ def test_friction_between_layers_holds_a_fold_on_a_slope():
             assert 200 < top.sum() < 800  # about half the cloth is the top layer
         angle = np.radians(14.0)
         sim.update({"gravity": [0.0, 9.81 * np.sin(angle), -9.81 * np.cos(angle)]})
-        layers = (top, ~top) if top.any() else (~top,)  # (top,) bottom
+        layers = (top, ~top) if top.any() else (~top,)  # the two halves, or the one layer
         before = [sim.positions[layer, 1].mean() for layer in layers]
         sim.advance(1.0)
         slid[case] = [
