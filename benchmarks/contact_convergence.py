@@ -22,8 +22,7 @@ estimates.
 below the finest fixed one) and ``--tolerances`` change the cloth, the steps
 and the tolerances: a 6x6 cloth is cheap enough for a reference at
 1/122880 s (``--size 6 --halvings 9 --finer 3 --tolerances 1e-2 1e-3 1e-4
-1e-5 --out benchmarks/results/contact_convergence_6.md``; its own error
-there is still above what 1e-5 m allows). A fixed-step run that raises a
+1e-5 --out benchmarks/results/contact_convergence_6.md``). A fixed-step run that raises a
 :class:`~pvcloth.errors.DivergenceError` (Newton's iterations stopped short
 of their tolerance at one of the finest steps, in the runs made) is marked
 "did not finish" in the table.
@@ -104,9 +103,10 @@ def main() -> None:
     reference = 1 / (60 * 2 ** (args.halvings - 1 + args.finer))
     truth, wall, _ = run("bdf2", reference, size=size)
     print(f"reference: bdf2 at 1/{round(1 / reference)} s, {wall:.0f} s", flush=True)
-    # The landings make every method first order (each point's is an event
-    # inside a step): the run at k times the reference's step is off by
-    # about k times its error, so their distance is about k - 1 times it.
+    # Each point's landing is an event inside a step, and the friction after
+    # the step is first order, so the error is taken as first order (an
+    # over-estimate if it falls faster): the run at k times the reference's
+    # step is off by about k times its error, their distance k - 1 times it.
     for times in (2, 4, 8):  # a run may stop at one of these steps (see above)
         try:
             coarser, _, _ = run("bdf2", times * reference, size=size)
@@ -148,7 +148,8 @@ def main() -> None:
             if times == 2
             else f"run at {times} times its step, over {times - 1}"
         )
-        + ", if its error is first order, as the landings make it), and no error below it "
+        + ": its error if first order, an over-estimate if it falls faster), and no error "
+        "below it "
         "can be measured here.",
         "",
         f"| step | {head} |",
