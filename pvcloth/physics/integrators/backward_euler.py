@@ -463,8 +463,8 @@ class ObstaclePenalty:
     step's start, lagged, and capped it at ``m / h``: the model then
     depended on the step, and on a 6x6 cloth dropped onto a sphere ``bdf2``'s
     fixed-step errors wandered between 0.05 and 0.4 mm from 1/240 to
-    1/7680 s, where this one's fall 2.7 to 3.7 times a halving from
-    1/1920 s down (``benchmarks/contact_convergence.py``).
+    1/7680 s, where this one's fall 2.9, 2.7 and 3.6 times at the halvings
+    below 1/1920 s (``benchmarks/results/contact_convergence_6.md``).
 
     Parameters
     ----------
