@@ -315,13 +315,15 @@ def penalty_on(spec, depths, speeds, dt, rng):
 def test_newton_s_penalty_force_is_its_potential_s_slope(spec):
     """The penalty's and its dashpot's force (``add_force``) is minus the
     slope of their energy (``change``, summed in closed form) along random
-    moves, by central differences; on a flat ground the Hessian is the
-    force's own slope wherever its dashpot's curvature is not clamped."""
+    moves, by central differences (points entering, leaving, and starting
+    outside the layer); on a flat ground the Hessian is the force's own
+    slope, but for the last point, leaving fast, where the dashpot's
+    negative curvature is clamped off and the penalty's alone is left."""
     rng = np.random.default_rng(3)
-    depths = [2e-4, 5e-4, 1e-3, 1.2e-3, 0.0, 4e-4]
-    speeds = [-0.5, -0.05, 0.02, -1.0, -0.3, 0.01]  # m/s along the normal
+    depths = [2e-4, 5e-4, 1e-3, 1.2e-3, 0.0, 4e-4, 2e-4]
+    speeds = [-0.5, -0.05, 0.02, -1.0, -0.3, 0.01, 0.2]  # m/s along the normal
     dt = 1 / 600
-    penalty, end, _, _ = penalty_on(spec, depths, speeds, dt, rng)
+    penalty, end, normal, layer = penalty_on(spec, depths, speeds, dt, rng)
     force = np.zeros_like(end)
     penalty.add_force(end, force)
     assert np.abs(force).max() > 1.0  # pressed hard enough to test anything
@@ -340,8 +342,13 @@ def test_newton_s_penalty_force_is_its_potential_s_slope(spec):
             penalty.add_force(end + move, ahead)
             penalty.add_force(end - move, behind)
             np.testing.assert_allclose(
-                hessian @ move.ravel(), -(ahead - behind).ravel() / 2, rtol=1e-4, atol=1e-9
-            )
+                (hessian @ move.ravel())[:-3], -(ahead - behind).ravel()[:-3] / 2, rtol=1e-4,
+                atol=1e-8,
+            )  # fmt: skip
+        clamped = 2 * penalty.stiffness[0][-1] * depths[-1] / max(layer, 1e-3)
+        np.testing.assert_allclose(
+            hessian[-3:, -3:], clamped * np.outer(normal[-1], normal[-1]), rtol=1e-9, atol=1e-9
+        )
 
 
 def test_newton_s_penalty_dashpot_is_hunt_and_crossley_s_at_any_step():
@@ -391,14 +398,15 @@ def test_contact_in_newton_s_step_converges_with_the_step_and_the_tolerance():
     give four; the dashpot lagged and capped at ``m / h`` made the model
     change with the step and the error grew there), Newton finishes at
     1/30720 s (its line search once stopped at the landing, on rounding),
-    and adaptive runs end within ten times ``tolerance * t`` at 1e-2 to
-    1e-4 m."""
+    and adaptive runs end within twice ``tolerance * t`` at 1e-2 to 1e-4 m
+    (the goal is ten times; the dashpot taken at the start passed this
+    too: it showed at 1e-5 m, 6.6 times, too costly here)."""
     truth = sphere_drop(dt=1 / 30720)
     errors = [
         np.sqrt(((sphere_drop(dt=1 / (1920 * 2**k)) - truth) ** 2).sum(axis=1).mean())
         for k in (0, 2)
     ]
     assert errors[1] < errors[0] / 5, errors
-    for tolerance in (1e-2, 1e-3, 1e-4):
+    for tolerance in (1e-2, 1e-3, 1e-4):  # measured: 0.05 to 0.31 times tolerance * t
         error = np.sqrt(((sphere_drop(tolerance=tolerance) - truth) ** 2).sum(axis=1).mean())
-        assert error < 10 * tolerance * 0.2, (tolerance, error)
+        assert error < 2 * tolerance * 0.2, (tolerance, error)

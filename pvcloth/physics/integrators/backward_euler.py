@@ -354,20 +354,30 @@ class _StepPotential:
         ten times the tolerance) a fall of ``|r|`` by as much passes too: at
         small steps the last iterations change ``Psi`` by less than its
         rounding (measured: 1.7e-17 J predicted at a 7.5e-5 s step, where
-        the full step took the residual from 1e-3 to 2e-8 m/s^2). The
-        accepted point, or None when the direction does not descend or no
-        length down to 1/1024 passes."""
+        the full step took the residual from 1e-3 to 2e-8 m/s^2). Anywhere,
+        a full step whose promised fall and inertial energy are both within
+        :data:`ROUNDING` times the rounding of ``Psi``'s change passes if it
+        halves ``|r|`` (``bdf2`` stopped at a landing at 1/30720 s, 12 times
+        its tolerance: 6.8e-16 J promised, +5e-16 J of rounding measured,
+        the residual cut 20,000-fold by the full step). The accepted point,
+        or None when the direction does not descend or no length down to
+        1/1024 passes."""
         slope = float(np.vdot(self.model.mass[:, None] * residual, correction)) / self.dt**2
         if not slope < 0:  # also NaN: an exactly singular matrix
             return None
         norm = np.linalg.norm(residual) if near else 0.0
         # Psi's change cannot be told from its rounding when the fall
         # promised is near the rounding of its largest terms: the inertial
-        # forces (as large as all the others together) times the positions'
-        # rounding. There a full step that halves the residual passes.
-        inertia = np.linalg.norm(guess - self.drift, axis=1) @ self.model.mass / self.dt**2
+        # forces of the moving points (as large as all the others together)
+        # times the positions' rounding. There a full step that halves the
+        # residual passes, if it is that small in inertial energy too (an
+        # exact Hessian can be indefinite: a small slope alone does not
+        # bound the step).
+        moving = self.model.mass * (self.inv_mass > 0)
+        inertia = np.linalg.norm(guess - self.drift, axis=1) @ moving / self.dt**2
         rounding = np.finfo(float).eps * float(np.abs(guess).max()) * float(inertia)
-        if -slope < ROUNDING * rounding:
+        kinetic = 0.5 * float(moving @ (correction * correction).sum(axis=1)) / self.dt**2
+        if max(-slope, kinetic) < ROUNDING * rounding:
             trial = guess + correction
             if np.linalg.norm(self.residual(trial)) <= 0.5 * np.linalg.norm(residual):
                 return trial
@@ -416,7 +426,7 @@ PENALTY_REACH = 4.0
 
 
 class ObstaclePenalty:
-    """The obstacles inside Newton's solve: a one-sided quadratic penalty in
+    """The obstacles inside Newton's solve: a one-sided cubic penalty in
     the step's incremental potential (backward Euler's and BDF2's).
 
     For a point ``i`` and an obstacle, ``E = k_i D_i^3 / (3 l)`` with the
@@ -433,8 +443,8 @@ class ObstaclePenalty:
     step leaves it. The penalty does not depend on the step, so smaller
     steps converge to it, its dashpot's (below) included. Its gradient and
     its Hessian's ``2 k D / l n n^T`` join the potential's (the curvature
-    of a sphere's gap, a small negative term, is left out: Newton stays a
-    descent method). Friction is not in the potential: the solve reports
+    of a sphere's gap, a small term, negative for the penalty, is left out:
+    Newton stays a descent method). Friction is not in the potential: the solve reports
     each held point's normal impulse (:meth:`held`) and the response after
     the step applies Coulomb's law with it
     (:meth:`~pvcloth.physics.obstacles.Obstacle._hold`), which on a slope
@@ -482,7 +492,7 @@ class ObstaclePenalty:
     start : numpy.ndarray, optional
         The solve's start ``x`` (m, ``(N, 3)``; BDF2's combination of its
         last two states), where the dashpot takes its gaps ``g_0`` (at
-        ``end_time - dt``) and coefficients; without it, no dashpot.
+        ``end_time - dt``); without it, no dashpot.
     """
 
     def __init__(self, obstacles, rows, stiffness, dt: float, end_time: float, mass, start=None):
@@ -550,7 +560,7 @@ class ObstaclePenalty:
         return total
 
     def add_force(self, t: np.ndarray, force: np.ndarray) -> None:
-        """Add the penalty's force at ``t`` (N, outward: ``k d^2 / l``) and
+        """Add the penalty's force at ``t`` (N, outward: ``k D^2 / l``) and
         its dashpot's (``-beta k D^2 (g - g_0) / (l h)`` along the normal)
         into ``force``."""
         for k in range(len(self.obstacles)):
@@ -592,7 +602,8 @@ class ObstaclePenalty:
         """The points the penalty pushes on at ``x`` (m), one
         :class:`~pvcloth.physics.obstacles.Contacts` per obstacle with their
         normals, the normal impulse per unit mass the push gave them over
-        the step (m/s: ``h k D^2 / (l m)``) and the potential's step ``h`` as
+        the step (m/s: ``h k D^2 / (l m)``, with the dashpot's share where
+        the point ends inside the grown shape) and the potential's step ``h`` as
         the lever of a change of velocity, for friction after the step.
 
         The dashpot's force counts only for a point that ends inside the
