@@ -392,9 +392,9 @@ class _StepPotential:
         return None
 
 
-#: The line search judges a Newton step by the residual's fall as well when
-#: the fall of ``Psi`` it promises is under this many times the rounding of
-#: ``Psi``'s change (:meth:`_StepPotential.search`).
+#: The line search judges a full Newton step by the residual's fall when the
+#: fall of ``Psi`` it promises and its inertial energy are both under this
+#: many times the rounding of ``Psi``'s change (:meth:`_StepPotential.search`).
 ROUNDING = 1000.0
 #: ``omega`` (rad/s): the penalty's stiffness per point over its mass is
 #: ``omega^2`` at the depth scale. A point arriving at speed ``v`` stops
