@@ -541,6 +541,16 @@ class ObstaclePenalty:
         gap, normal = self.obstacles[k].gap(t[self.rows[k]], self.end_time)
         return np.maximum(self.layers[k] - gap, 0.0), gap, normal
 
+    def _pushes(self, k: int, depth, gap, rows=slice(None)):
+        """The penalty's outward force ``k D^2 / l`` and its dashpot's pull
+        ``beta k D^2 (g - g_0) / (l h)`` (N, along the normal) on obstacle
+        ``k``'s ``rows`` (all by default) at ``depth`` and ``gap`` (m, of
+        all its rows)."""
+        square = depth[rows] ** 2
+        push = self.stiffness[k][rows] * square / self.scales[k]
+        damped = self.damping[k][rows] * square * (gap[rows] - self.start_gaps[k][rows]) / self.dt
+        return push, damped
+
     def change(self, t: np.ndarray, trial: np.ndarray) -> float:
         """The penalty's ``E(trial) - E(t)`` (J), from the difference of
         cubes, and its dashpot's (of fourth and third powers)."""
@@ -549,12 +559,10 @@ class ObstaclePenalty:
             if self.rows[k].size:
                 a, gap_a, _ = self._gaps(k, trial)
                 b, gap_b, _ = self._gaps(k, t)
-                total += float(self.stiffness[k] @ ((a - b) * (a * a + a * b + b * b))) / (
-                    3 * self.scales[k]
-                )
+                cubes = (a - b) * (a * a + a * b + b * b)
+                total += float(self.stiffness[k] @ cubes) / (3 * self.scales[k])
                 # The dashpot's D^4 / 4 - D_0 D^3 / 3 (times c / h), by differences
                 start = self.layers[k] - self.start_gaps[k]  # D_0, signed
-                cubes = (a - b) * (a * a + a * b + b * b)
                 fourths = (a - b) * (a + b) * (a * a + b * b)
                 total += float(self.damping[k] @ (fourths / 4 - start * cubes / 3)) / self.dt
         return total
@@ -566,8 +574,8 @@ class ObstaclePenalty:
         for k in range(len(self.obstacles)):
             if self.rows[k].size:
                 depth, gap, normal = self._gaps(k, t)
-                push = self.stiffness[k] * depth**2 / self.scales[k]
-                push -= self.damping[k] * depth**2 * (gap - self.start_gaps[k]) / self.dt
+                push, damped = self._pushes(k, depth, gap)
+                push -= damped
                 force[self.rows[k]] += push[:, None] * normal
 
     def hessian(self, t: np.ndarray) -> sp.csr_matrix:
@@ -622,12 +630,9 @@ class ObstaclePenalty:
             depth = np.maximum(self.layers[k] - gap, 0.0)
             pressed = depth > 0.0
             index = rows[pressed]
-            push = self.stiffness[k][pressed] * depth[pressed] ** 2 / self.scales[k]
+            push, damped = self._pushes(k, depth, gap, pressed)
             # The dashpot's share, where the point ends inside the grown shape
-            inside = gap[pressed] < 0.0
-            moved = gap[pressed] - self.start_gaps[k][pressed]
-            damped = self.damping[k][pressed] * depth[pressed] ** 2 * moved / self.dt
-            push = np.where(inside, np.maximum(push - damped, 0.0), push)
+            push = np.where(gap[pressed] < 0.0, np.maximum(push - damped, 0.0), push)
             impulse = self.dt * push / self.mass[index]
             held.append(Contacts(index, normal[pressed], impulse, self.dt))
         return held
