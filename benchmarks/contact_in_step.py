@@ -6,7 +6,7 @@ standing on the ground from 0.6 m, at one 1/60 s step a frame: with
 ``fast_bdf2`` at 32x32 and 64x64 points (contact impulses in its
 local/global solve, :mod:`pvcloth.physics.contact`) and with ``bdf2`` at
 16x16 (a penalty in Newton's potential,
-:class:`~pvcloth.physics.integrators.backward_euler.ObstaclePenalty`; seconds
+:class:`~pvcloth.physics.integrators.penalties.ObstaclePenalty`; seconds
 a step at 64x64). Each runs two ways in one process, in turns of five frames: with the
 obstacles inside the solve (the default) and with them left to the response
 after the step alone (``integrator.contact_in_step = False``, as the

@@ -16,7 +16,7 @@ import pvcloth
 from conftest import SCENES
 from pvcloth import ObstacleSpec
 from pvcloth.physics.contact import _project_compiled, _project_numpy, _shape
-from pvcloth.physics.integrators import backward_euler
+from pvcloth.physics.integrators import penalties
 from pvcloth.physics.obstacles import build_obstacle
 from pvcloth.physics.simulation import Simulation
 
@@ -274,7 +274,7 @@ def test_newton_s_penalty_stops_a_landing_cloth_without_a_bounce(integrator, mon
     settled)."""
     landing, rising = rebound(integrator)
     assert rising < 0.05 * landing, f"rises at {rising:.3g} m/s after landing at {landing:.3g}"
-    monkeypatch.setattr(backward_euler, "PENALTY_DAMPING", 0.0)
+    monkeypatch.setattr(penalties, "PENALTY_DAMPING", 0.0)
     landing, elastic = rebound(integrator)
     assert elastic > 0.2 * landing, f"without the dashpot it rises at only {elastic:.3g} m/s"
 
@@ -285,7 +285,7 @@ def penalty_on(spec, depths, speeds, dt, rng):
     negative: in) over a step ``dt``; with their end positions."""
     obstacle = build_obstacle(spec)
     k = len(depths)
-    layer = backward_euler.PENALTY_LAYER * obstacle.thickness
+    layer = penalties.PENALTY_LAYER * obstacle.thickness
     if spec.type == "sphere":
         normal = rng.normal(size=(k, 3))
         normal /= np.linalg.norm(normal, axis=1)[:, None]
@@ -298,9 +298,9 @@ def penalty_on(spec, depths, speeds, dt, rng):
     end = surface + (layer - np.asarray(depths))[:, None] * normal
     start = end - dt * np.asarray(speeds)[:, None] * normal
     mass = np.full(k, 0.01)
-    stiffness = backward_euler.PENALTY_FREQUENCY**2 * mass
+    stiffness = penalties.PENALTY_FREQUENCY**2 * mass
     rows = np.arange(k)
-    penalty = backward_euler.ObstaclePenalty([obstacle], [rows], [stiffness], dt, 1.0, mass, start)
+    penalty = penalties.ObstaclePenalty([obstacle], [rows], [stiffness], dt, 1.0, mass, start)
     return penalty, end, normal, layer
 
 
@@ -345,7 +345,7 @@ def test_newton_s_penalty_force_is_its_potential_s_slope(spec):
                 (hessian @ move.ravel())[:-3], -(ahead - behind).ravel()[:-3] / 2, rtol=1e-4,
                 atol=1e-8,
             )  # fmt: skip
-        clamped = 2 * penalty.stiffness[0][-1] * depths[-1] / max(layer, 1e-3)
+        clamped = 2 * penalty.laws[0].stiffness[-1] * depths[-1] / max(layer, 1e-3)
         np.testing.assert_allclose(
             hessian[-3:, -3:], clamped * np.outer(normal[-1], normal[-1]), rtol=1e-9, atol=1e-9
         )
@@ -364,9 +364,9 @@ def test_newton_s_penalty_dashpot_is_hunt_and_crossley_s_at_any_step():
         force = np.zeros_like(end)
         penalty.add_force(end, force)
         pushes.append(np.einsum("ij,ij->i", force, normal))
-    scale = max(layer, backward_euler.PENALTY_SCALE)
-    k = backward_euler.PENALTY_FREQUENCY**2 * 0.01
-    law = k * np.square(depths) / scale * (1 - backward_euler.PENALTY_DAMPING * np.array(speeds))
+    scale = max(layer, penalties.PENALTY_SCALE)
+    k = penalties.PENALTY_FREQUENCY**2 * 0.01
+    law = k * np.square(depths) / scale * (1 - penalties.PENALTY_DAMPING * np.array(speeds))
     for push in pushes:
         np.testing.assert_allclose(push, law, rtol=1e-6)
 

@@ -1,6 +1,6 @@
 """Contact with obstacles inside a local/global solve (the Newton
 integrators' counterpart is a penalty in their potential:
-:class:`~pvcloth.physics.integrators.backward_euler.ObstaclePenalty`).
+:class:`~pvcloth.physics.integrators.penalties.ObstaclePenalty`).
 
 ``fast_mass_spring`` and ``fast_bdf2`` solve their step by iterations on
 one factorised matrix ``A`` (:mod:`~pvcloth.physics.integrators.fast_mass_spring`).

@@ -56,6 +56,9 @@ class Step:
         The points the integrator's own solve held against obstacles
         (``Integrator.held_contacts``), which the obstacle contacts add to
         their report.
+    held_layers : HeldPairs or None
+        The pairs of layers the integrator's solve held apart
+        (``Integrator.held_layers``), which the self-contact gives friction.
     """
 
     before: State
@@ -68,6 +71,7 @@ class Step:
     reports: dict[str, Any] = field(default_factory=dict)
     integrator_check: tuple[float, bool] | None = None
     held: list = field(default_factory=list)
+    held_layers: Any = None
 
 
 class Operator(Protocol):
@@ -149,7 +153,8 @@ class PinLanding:
 
 
 class SelfContact:
-    """The cloth kept from passing through itself; reports the
+    """Friction on the pairs of layers the integrator's solve held apart,
+    then the cloth kept from passing through itself; reports the
     self-collision's :class:`~pvcloth.physics.self_collision.Report`."""
 
     name = "self-collision"
@@ -159,6 +164,8 @@ class SelfContact:
 
     def __call__(self, step: Step) -> None:
         touched = step.reports.get(ObstacleContacts.name, ())
+        if step.held_layers is not None:
+            self.contact.rub(step.held_layers, step.after.x, step.after.v, step.control.inv_mass)
         self.contact.resolve(
             step.before.x, step.after.x, step.after.v, step.control.inv_mass, step.dt, touched
         )

@@ -183,7 +183,10 @@ class Simulation(Clocks, LiveEdits, Pins):
         another in (:meth:`SelfCollision.longest_step
         <pvcloth.physics.self_collision.SelfCollision.longest_step>`); a
         longer step is split into equal substeps under it, whatever the
-        stability policy. Infinite without ``[self_collision]``."""
+        stability policy. Infinite without ``[self_collision]``, and for an
+        integrator whose solve holds the layers (``holds_layers``)."""
+        if self.integrator.holds_layers:
+            return math.inf
         return step_policy.contact_step(self.model, self.scene)
 
     @classmethod
@@ -526,6 +529,7 @@ class Simulation(Clocks, LiveEdits, Pins):
             pin_velocity,
             integrator_check=self.integrator.check,
             held=self.integrator.held_contacts(new.x, new.t) if self.model.obstacles else [],
+            held_layers=self.integrator.held_layers(new.x) if self.model.self_collision else None,
         )
         for operator in self.pipeline:
             operator(step)

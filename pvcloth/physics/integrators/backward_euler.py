@@ -12,7 +12,7 @@ from scipy.sparse.linalg import splu
 from pvcloth.errors import DivergenceError
 from pvcloth.physics.forces import TINY_LENGTH
 from pvcloth.physics.integrators.base import Integrator, drift_error, register
-from pvcloth.physics.obstacles import Contacts
+from pvcloth.physics.integrators.penalties import LayerPenalty, ObstaclePenalty
 from pvcloth.physics.springs import BlockPattern, stiffness_blocks
 from pvcloth.physics.state import Control, State
 
@@ -59,10 +59,13 @@ class BackwardEuler(Integrator):
     is kept from one iteration to the next while the residual at least
     halves (a chord step).
 
-    With obstacles (and no self-collision) the potential holds a penalty
-    for each (:class:`ObstaclePenalty`), so the solve sees what holds the
-    cloth; the response after the step stays as the fail-safe and applies
-    the friction.
+    With obstacles the potential holds a penalty for each
+    (:class:`~pvcloth.physics.integrators.penalties.ObstaclePenalty`), and
+    with self-collision one for each pair of layers the step may bring
+    close (:class:`~pvcloth.physics.integrators.penalties.LayerPenalty`),
+    so the solve sees what holds the cloth up and no step is split for
+    self-collision; the response after the step stays as the fail-safe and
+    applies the friction.
 
     A step has converged when no point is left with an unbalanced
     acceleration (``r / h^2``, the force the step leaves unbalanced over the
@@ -106,11 +109,21 @@ class BackwardEuler(Integrator):
         self.error = 0.0
         self._pattern: tuple[int, BlockPattern] | None = None
         #: The obstacles' penalty of the last step's solve (None without
-        #: obstacles, or with self-collision): see :class:`ObstaclePenalty`.
+        #: obstacles): see :class:`ObstaclePenalty`.
         self.penalty: ObstaclePenalty | None = None
-        #: Whether the obstacles enter the solve (False: after the step only,
-        #: as the explicit integrators have them).
+        #: The layers' penalty of the last step's solve (None without
+        #: self-collision): see :class:`LayerPenalty`.
+        self.layers: LayerPenalty | None = None
+        #: Whether the obstacles and the layers enter the solve (False: after
+        #: the step only, as the explicit integrators have them).
         self.contact_in_step = True
+
+    @property
+    def holds_layers(self) -> bool:
+        return self.contact_in_step
+
+    def held_layers(self, x: np.ndarray):
+        return None if self.layers is None else self.layers.held(x)
 
     def held_contacts(self, x: np.ndarray, t: float) -> list:
         if self.penalty is None:
@@ -142,6 +155,7 @@ class BackwardEuler(Integrator):
         guess: np.ndarray,
         t: float,
         end_time: float | None = None,
+        positions: np.ndarray | None = None,
     ) -> np.ndarray:
         """The end positions ``x'`` (m, ``(N, 3)``) of the implicit equation
         ``x' = x + dt v + dt^2 M^-1 F(x', (x' - x) / dt)``, by Newton from
@@ -153,18 +167,22 @@ class BackwardEuler(Integrator):
         for ``x``, ``v`` and two thirds of its step for ``dt``. ``t`` (s) is
         the step's start (it names the step in the error raised when Newton
         does not converge); ``end_time`` (s, ``t + dt`` if not given) where
-        the obstacles are met (:class:`ObstaclePenalty`)."""
+        the obstacles are met (:class:`ObstaclePenalty`); ``positions`` (m,
+        ``(N, 3)``, ``x`` if not given) the step's start, where the layers'
+        pairs are fixed (:class:`LayerPenalty`)."""
         table = model.spring_table()
         # The pattern depends only on the springs' ends, which never change
         # for a model: kept until another model comes.
         if self._pattern is None or self._pattern[0] != model.serial:
             self._pattern = (model.serial, BlockPattern(table.a, table.b, model.n_points))
         end_time = t + dt if end_time is None else end_time
-        penalty = None
+        penalties = []
+        self.penalty = self.layers = None
         if self.contact_in_step:
-            penalty = ObstaclePenalty.build(model, control, x, dt, guess, end_time)
-        potential = _StepPotential(model, x, v, dt, control.inv_mass, self._pattern[1], penalty)
-        self.penalty = penalty
+            self.penalty = ObstaclePenalty.build(model, control, x, dt, guess, end_time)
+            self.layers = LayerPenalty.build(model, control, x, dt, guess, positions)
+            penalties = [p for p in (self.penalty, self.layers) if p is not None]
+        potential = _StepPotential(model, x, v, dt, control.inv_mass, self._pattern[1], penalties)
         potential.anchor(guess)
         residual = potential.residual(guess)
         size = np.abs(residual).max() / dt**2
@@ -220,10 +238,10 @@ class _StepPotential:
     line search along a Newton direction."""
 
     def __init__(
-        self, model: Model, x, v, dt: float, inv_mass, pattern: BlockPattern, penalty=None
+        self, model: Model, x, v, dt: float, inv_mass, pattern: BlockPattern, penalties=()
     ):
         table = model.spring_table()
-        self.penalty = penalty  # ObstaclePenalty or None
+        self.penalties = list(penalties)  # ObstaclePenalty, LayerPenalty
         self.model, self.x, self.dt, self.inv_mass, self.pattern = model, x, dt, inv_mass, pattern
         self.a, self.b = table.a, table.b
         self.drift = x + dt * v  # (N, 3) m
@@ -275,7 +293,7 @@ class _StepPotential:
         bending = 0.0
         if self.bending is not None:  # x'Qx/2 - t'Qt/2 = (x - t)'Q(x + t)/2, Q symmetric
             bending = 0.5 * float(np.vdot(move, self.bending @ (trial + t)))
-        contact = 0.0 if self.penalty is None else self.penalty.change(t, trial)
+        contact = sum(penalty.change(t, trial) for penalty in self.penalties)
         return inertia + air + springs + bending + contact - float(np.vdot(self.constant, move))
 
     def residual(self, t: np.ndarray) -> np.ndarray:
@@ -289,8 +307,8 @@ class _StepPotential:
         force = self.constant - (self.rate / dt * mass)[:, None] * (t - self.x)
         if self.bending is not None:
             force -= self.bending @ t
-        if self.penalty is not None:
-            self.penalty.add_force(t, force)
+        for penalty in self.penalties:
+            penalty.add_force(t, force)
         n = t.shape[0]
         for axis in range(3):
             force[:, axis] += np.bincount(self.a, on_a[:, axis], minlength=n)
@@ -308,8 +326,8 @@ class _StepPotential:
         dfdx = self.pattern.assemble(blocks)
         if self.bending is not None:
             dfdx = dfdx - self.model.bending_hessian()
-        if self.penalty is not None:
-            dfdx = dfdx - self.penalty.hessian(t)
+        for penalty in self.penalties:
+            dfdx = dfdx - penalty.hessian(t)
         free = np.repeat(~pinned, 3)
         diagonal = np.repeat(mass * (1.0 + self.rate * dt), 3)
         return (sp.diags(diagonal) - dt * dt * dfdx).tocsr()[free][:, free]
@@ -396,243 +414,3 @@ class _StepPotential:
 #: fall of ``Psi`` it promises and its inertial energy are both under this
 #: many times the rounding of ``Psi``'s change (:meth:`_StepPotential.search`).
 ROUNDING = 1000.0
-#: ``omega`` (rad/s): the penalty's stiffness per point over its mass is
-#: ``omega^2`` at the depth scale. A point arriving at speed ``v`` stops
-#: within the layer ``l`` while ``v < omega l / sqrt(1.5)``: 6 m/s for a
-#: 1 cm thickness, 3 m/s for 5 mm (at 600 rad/s a cloth dropped 9 cm onto a
-#: sphere went through it, and the response after the step, removing the
-#: approach, threw an adaptive run's error estimate off at every step
-#: length). Fixed, not scaled with the step: a stiffness of ``100 m / h^2``
-#: made the model change with the step, and where an adaptive run shortened
-#: it, a point left deep by a long step was thrown out by a far stiffer one.
-PENALTY_FREQUENCY = 3000.0
-#: Where the penalty starts, as a share of the obstacle's thickness: a point
-#: at rest under its weight stays outside the grown shape, where the
-#: response after the step leaves it alone.
-PENALTY_LAYER = 0.25
-#: ``beta`` (s/m): the penalty's dashpot as a share of its force per unit
-#: speed (Hunt and Crossley 1975); a point leaves the layer at no more than
-#: about ``1 / beta`` (3.3 cm/s) while the dashpot holds it. With it, a 6x6
-#: cotton landing on the ground at 0.75 m/s at 1/2000 s steps rises again
-#: at under 5 % of that, without it at over a fifth
-#: (``tests/test_contact_in_step.py``).
-PENALTY_DAMPING = 30.0
-#: The smallest depth scale (m) of the cubic penalty (see :class:`ObstaclePenalty`).
-PENALTY_SCALE = 1e-3
-#: Points whose gap at the step's end time is under this many times the
-#: step's largest inertial move and fall under gravity (plus the thickness)
-#: are watched.
-PENALTY_REACH = 4.0
-
-
-class ObstaclePenalty:
-    """The obstacles inside Newton's solve: a one-sided cubic penalty in
-    the step's incremental potential (backward Euler's and BDF2's).
-
-    For a point ``i`` and an obstacle, ``E = k_i D_i^3 / (3 l)`` with the
-    depth ``D_i = max(d - g_i, 0)`` into a layer ``d = PENALTY_LAYER T`` over
-    the obstacle grown by its thickness ``T`` (``g_i`` the point's gap to it),
-    ``l = max(d, PENALTY_SCALE)`` and ``k_i = m_i omega^2`` (``omega`` is
-    :data:`PENALTY_FREQUENCY`). Cubic, so that its force ``k D^2 / l`` and
-    the force's slope both start from zero: a quadratic penalty's force
-    switched on with a kink, which BDF2's error estimate (from the third
-    derivative) saw at every step length, and an adaptive run's steps fell
-    to a nanosecond where a point first entered the layer. A point at rest
-    under its weight sinks ``sqrt(g l) / omega`` (37 um in a 1.25 mm
-    layer) into it, outside the grown shape, where the response after the
-    step leaves it. The penalty does not depend on the step, so smaller
-    steps converge to it, its dashpot's (below) included. Its gradient and
-    its Hessian's ``2 k D / l n n^T`` join the potential's (the curvature
-    of a sphere's gap, a small term, negative for the penalty, is left out:
-    Newton stays a descent method). Friction is not in the potential: the solve reports
-    each held point's normal impulse (:meth:`held`) and the response after
-    the step applies Coulomb's law with it
-    (:meth:`~pvcloth.physics.obstacles.Obstacle._hold`), which on a slope
-    sticks below the friction angle and slides at the Coulomb rate.
-
-    The penalty alone is elastic: a point landing in the layer is thrown
-    back once the steps are short enough to follow the landing (about
-    1/3000 s), so the finer the step, the more the model converged to a
-    cloth that bounced and never settled, where at 1/60 s the implicit
-    step's own damping had stopped it (``tests/test_contact_in_step.py``
-    measures the bounce with and without the dashpot). A dashpot
-    in the manner of Hunt and Crossley (1975, "Coefficient of restitution
-    interpreted as damping in vibroimpact") takes the landing: its force
-    ``-beta k D^2 (g - g_0) / (l h)`` along the normal (``beta`` is
-    :data:`PENALTY_DAMPING`), the penalty's force at the step's end depth
-    ``D`` times ``beta`` times the point's speed along the normal, ``(g -
-    g_0) / h`` (``g_0`` the gap where the solve starts). Taken at the end,
-    as every other force of the step, it is the derivative along the gap of
-    ``beta k (D^4 / 4 - D_0 D^3 / 3) / (l h)`` (``D_0 = d - g_0``), so it
-    joins the potential exactly; its curvature, ``beta k D (D - 2 (g -
-    g_0)) / (l h)``, is negative where a point leaves the layer fast and
-    is clamped at zero in the Hessian. It vanishes at rest and where a
-    point enters the layer, so it keeps the force's smooth start; like
-    Hunt and Crossley's, it holds back a point leaving the layer faster
-    than ``1 / beta``. An earlier dashpot took its coefficient at the
-    step's start, lagged, and capped it at ``m / h``: the model then
-    depended on the step, and on a 6x6 cloth dropped onto a sphere ``bdf2``'s
-    fixed-step errors wandered between 0.05 and 0.4 mm from 1/240 to
-    1/7680 s, where this one's fall 2.9, 2.7 and 3.6 times at the halvings
-    below 1/1920 s (``benchmarks/results/contact_convergence_6.md``).
-
-    Parameters
-    ----------
-    obstacles : list of Obstacle
-    rows : list of numpy.ndarray
-        Per obstacle, the points watched.
-    stiffness : list of numpy.ndarray
-        Per obstacle, ``k_i`` of its rows (N/m).
-    dt : float
-        The potential's step (s).
-    end_time : float
-        Where the obstacles are met (s).
-    mass : numpy.ndarray
-        The points' masses (kg), shape (N,).
-    start : numpy.ndarray, optional
-        The solve's start ``x`` (m, ``(N, 3)``; BDF2's combination of its
-        last two states), where the dashpot takes its gaps ``g_0`` (at
-        ``end_time - dt``); without it, no dashpot.
-    """
-
-    def __init__(self, obstacles, rows, stiffness, dt: float, end_time: float, mass, start=None):
-        self.obstacles, self.rows, self.stiffness = obstacles, rows, stiffness
-        self.dt, self.end_time, self.mass = dt, end_time, mass
-        self.layers = [PENALTY_LAYER * o.thickness for o in obstacles]
-        #: The depth (m) at which the cubic penalty is as stiff as
-        #: ``m omega^2``: the layer, or a millimetre for a thin one.
-        self.scales = [max(layer, PENALTY_SCALE) for layer in self.layers]
-        # The dashpot: per obstacle, each row's gap at the solve's start (m)
-        # and its coefficient per squared depth, beta k / l (kg/(s m^2)).
-        self.start_gaps, self.damping = [], []
-        for k, obstacle in enumerate(obstacles):
-            if start is None or not rows[k].size:
-                self.start_gaps.append(np.zeros(rows[k].size))
-                self.damping.append(np.zeros(rows[k].size))
-                continue
-            gap, _ = obstacle.gap(start[rows[k]], end_time - dt)
-            self.start_gaps.append(gap)
-            self.damping.append(PENALTY_DAMPING * stiffness[k] / self.scales[k])
-
-    @classmethod
-    def build(cls, model, control, x, dt: float, guess, end_time: float):
-        """The penalty for a solve from ``x`` (m) whose first iterate is
-        ``guess``, or None (no obstacles; self-collision, which meets the
-        layers after the step: a floor in the solve would bear the lowest
-        layer's weight alone)."""
-        if not model.obstacles or model.self_collision is not None:
-            return None
-        movable = control.movable_index
-        move = float(np.sqrt(((guess - x) ** 2).sum(axis=1).max(initial=0.0)))
-        fall = dt * dt * float(np.linalg.norm(model.gravity.acceleration)) if model.gravity else 0.0
-        reach = PENALTY_REACH * (move + fall)
-        rows, stiffness = [], []
-        for obstacle in model.obstacles:
-            gap, _ = obstacle.gap(x[movable], end_time)
-            watched = movable[gap < reach + obstacle.thickness]
-            rows.append(watched)
-            stiffness.append(PENALTY_FREQUENCY**2 * model.mass[watched])
-        return cls(model.obstacles, rows, stiffness, dt, end_time, model.mass, x)
-
-    def _gaps(self, k: int, t: np.ndarray):
-        """``(depth, gap, normal)`` of obstacle ``k``'s rows at ``t``: how
-        far each is into the penalty's layer (m, ``max(d - g, 0)``), its gap
-        ``g`` (m) and the outward normal."""
-        gap, normal = self.obstacles[k].gap(t[self.rows[k]], self.end_time)
-        return np.maximum(self.layers[k] - gap, 0.0), gap, normal
-
-    def _pushes(self, k: int, depth, gap, rows=slice(None)):
-        """The penalty's outward force ``k D^2 / l`` and its dashpot's pull
-        ``beta k D^2 (g - g_0) / (l h)`` (N, along the normal) on obstacle
-        ``k``'s ``rows`` (all by default) at ``depth`` and ``gap`` (m, of
-        all its rows)."""
-        square = depth[rows] ** 2
-        push = self.stiffness[k][rows] * square / self.scales[k]
-        damped = self.damping[k][rows] * square * (gap[rows] - self.start_gaps[k][rows]) / self.dt
-        return push, damped
-
-    def change(self, t: np.ndarray, trial: np.ndarray) -> float:
-        """The penalty's ``E(trial) - E(t)`` (J), from the difference of
-        cubes, and its dashpot's (of fourth and third powers)."""
-        total = 0.0
-        for k in range(len(self.obstacles)):
-            if self.rows[k].size:
-                a, gap_a, _ = self._gaps(k, trial)
-                b, gap_b, _ = self._gaps(k, t)
-                cubes = (a - b) * (a * a + a * b + b * b)
-                total += float(self.stiffness[k] @ cubes) / (3 * self.scales[k])
-                # The dashpot's D^4 / 4 - D_0 D^3 / 3 (times c / h), by differences
-                start = self.layers[k] - self.start_gaps[k]  # D_0, signed
-                fourths = (a - b) * (a + b) * (a * a + b * b)
-                total += float(self.damping[k] @ (fourths / 4 - start * cubes / 3)) / self.dt
-        return total
-
-    def add_force(self, t: np.ndarray, force: np.ndarray) -> None:
-        """Add the penalty's force at ``t`` (N, outward: ``k D^2 / l``) and
-        its dashpot's (``-beta k D^2 (g - g_0) / (l h)`` along the normal)
-        into ``force``."""
-        for k in range(len(self.obstacles)):
-            if self.rows[k].size:
-                depth, gap, normal = self._gaps(k, t)
-                push, damped = self._pushes(k, depth, gap)
-                push -= damped
-                force[self.rows[k]] += push[:, None] * normal
-
-    def hessian(self, t: np.ndarray) -> sp.csr_matrix:
-        """``(2 k D / l + max(beta k D (D - 2 (g - g_0)) / (l h), 0)) n n^T``
-        per point pressed, ``(3N, 3N)`` (N/m)."""
-        size = 3 * self.mass.size
-        blocks, cells = [], []
-        for k in range(len(self.obstacles)):
-            if self.rows[k].size:
-                depth, gap, normal = self._gaps(k, t)
-                # The dashpot's D (D - 2 (g - g_0)) c / h, negative where a
-                # point leaves the layer fast: clamped, Newton stays a descent.
-                moved = gap - self.start_gaps[k]
-                damped = self.damping[k] * depth * np.maximum(depth - 2 * moved, 0.0) / self.dt
-                curve = 2 * self.stiffness[k] * depth / self.scales[k] + damped
-                pressed = curve > 0.0
-                if pressed.any():
-                    n = normal[pressed]
-                    outer = n[:, :, None] * n[:, None, :]
-                    curve = curve[pressed]
-                    blocks.append(curve[:, None, None] * outer)
-                    cells.append(self.rows[k][pressed])
-        if not blocks:
-            return sp.csr_matrix((size, size))
-        block = np.concatenate(blocks)
-        point = np.concatenate(cells)
-        rows = (3 * point[:, None, None] + np.arange(3)[None, :, None]).repeat(3, axis=2)
-        cols = (3 * point[:, None, None] + np.arange(3)[None, None, :]).repeat(3, axis=1)
-        return sp.csr_matrix((block.ravel(), (rows.ravel(), cols.ravel())), shape=(size, size))
-
-    def held(self, x: np.ndarray, t: float) -> list:
-        """The points the penalty pushes on at ``x`` (m), one
-        :class:`~pvcloth.physics.obstacles.Contacts` per obstacle with their
-        normals, the normal impulse per unit mass the push gave them over
-        the step (m/s: ``h k D^2 / (l m)``, with the dashpot's share where
-        the point ends inside the grown shape) and the potential's step ``h`` as
-        the lever of a change of velocity, for friction after the step.
-
-        The dashpot's force counts only for a point that ends inside the
-        grown shape. In the layer, counted, it made each landing's friction,
-        applied after the step, a jump in velocity that an adaptive run's
-        estimate rejected down to ``solver.min_dt`` (``bdf2`` at 1e-4 m on
-        the sphere drop of ``benchmarks/contact_convergence.py`` stopped at
-        the landing, where without it the run completes). On a surface of
-        no thickness, whose layer is empty, every held point is inside and
-        the dashpot bears part of its weight at every step: left out, the
-        cloth slid 4 to 6 % too far (``tests/test_contact_in_step.py``)."""
-        held = []
-        for k, obstacle in enumerate(self.obstacles):
-            rows = self.rows[k]
-            gap, normal = obstacle.gap(x[rows], t)
-            depth = np.maximum(self.layers[k] - gap, 0.0)
-            pressed = depth > 0.0
-            index = rows[pressed]
-            push, damped = self._pushes(k, depth, gap, pressed)
-            # The dashpot's share, where the point ends inside the grown shape
-            push = np.where(gap[pressed] < 0.0, np.maximum(push - damped, 0.0), push)
-            impulse = self.dt * push / self.mass[index]
-            held.append(Contacts(index, normal[pressed], impulse, self.dt))
-        return held

@@ -87,6 +87,11 @@ class Integrator(ABC):
         simulation then holds BLAS to one thread around it
         (:mod:`pvcloth.physics.blas`); the explicit steps skip that cost
         (about 20 us, a sixth of a 32x32 step).
+    holds_layers : bool
+        Whether its own solve holds one layer of the cloth up on another
+        (:class:`~pvcloth.physics.integrators.penalties.LayerPenalty`): then
+        no step is split for self-collision
+        (:meth:`~pvcloth.physics.simulation.Simulation.contact_step`).
     """
 
     name: str = ""
@@ -99,6 +104,7 @@ class Integrator(ABC):
     interactive: bool = True
     max_step_growth: float = float("inf")
     uses_blas: bool = False
+    holds_layers: bool = False
     embedded: bool = False
     steady_steps: bool = False
     check: tuple[float, bool] | None = None
@@ -162,6 +168,13 @@ class Integrator(ABC):
         positions ``x`` (m, ``(N, 3)``) and time ``t`` (s); none unless the
         obstacles enter its solve (:mod:`pvcloth.physics.contact`)."""
         return []
+
+    def held_layers(self, x: np.ndarray):
+        """The pairs of layers its last step's own solve held apart
+        (:class:`~pvcloth.physics.integrators.penalties.HeldPairs`, their
+        normals at positions ``x``, m, ``(N, 3)``), for friction after the
+        step; None unless the layers enter its solve (:attr:`holds_layers`)."""
+        return None
 
     def get_state(self) -> dict[str, np.ndarray]:
         """Arrays the integrator carries between steps (saved in checkpoints)."""

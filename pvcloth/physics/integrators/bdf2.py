@@ -253,7 +253,9 @@ class BDF2(KeepsLastStep, BackwardEuler):
             x_hat, v_hat, h = bdf2_start(last, x, v, dt)
         # Start from the explicit drift; pinned points at their targets (the
         # simulation set their velocity so that x + dt v is the target).
-        end = self.solve(model, control, x_hat, v_hat, h, x + dt * v, state.t, state.t + dt)
+        end = self.solve(
+            model, control, x_hat, v_hat, h, x + dt * v, state.t, state.t + dt, positions=x
+        )
         v_new = (end - x_hat) / h
         v_new[control.pinned] = v[control.pinned]
         self.started_up = last is None

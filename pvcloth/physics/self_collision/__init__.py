@@ -4,7 +4,11 @@ Like the obstacles (:mod:`pvcloth.physics.obstacles`), this acts after the
 integrator's step, on positions and velocities, so every integrator gets the
 same response. It runs only when the scene has a ``[self_collision]`` table;
 otherwise the model holds no :class:`SelfCollision` and no code of this
-module runs.
+module runs. ``backward_euler`` and ``bdf2`` also hold the layers apart
+inside their solve, with a penalty on the pairs this module lists
+(:class:`~pvcloth.physics.integrators.penalties.LayerPenalty`); for them
+the response here is the fail-safe, and :meth:`SelfCollision.rub` gives
+the pairs their penalty held Coulomb friction.
 
 The cloth's surface is the grid's triangles, two per cell (the wind's split:
 corners ``(a, a+1, a+nx+1)`` and ``(a, a+nx+1, a+nx)``), and its edges are
@@ -126,7 +130,7 @@ from pvcloth.physics.self_collision.pairs import (
     screen,
     sort_rows,
 )
-from pvcloth.physics.self_collision.response import respond
+from pvcloth.physics.self_collision.response import respond, rub
 from pvcloth.physics.self_collision.zones import ZoneArrays, impact_zones, new_zones
 
 #: The margin ``eta`` as a share of the thickness.
@@ -212,6 +216,26 @@ class SelfCollision:
         0.0132
         """
         return math.inf if gravity <= 0.0 else math.sqrt(self.reach / gravity)
+
+    def rub(self, held, x1: np.ndarray, v1: np.ndarray, inv_mass) -> int:
+        """Coulomb friction, in place on ``x1`` (m) and ``v1`` (m/s), on
+        the pairs an integrator's solve held apart with a penalty
+        (``held``: :class:`~pvcloth.physics.integrators.penalties.HeldPairs`);
+        :func:`~pvcloth.physics.self_collision.response.rub`. Returns the
+        pairs that stuck."""
+        return int(
+            rub(
+                held.corners,
+                held.weights,
+                held.direction,
+                held.pushed,
+                x1,
+                v1,
+                inv_mass,
+                self.friction,
+                held.lever,
+            )  # fmt: skip
+        )
 
     def resolve(
         self, x0: np.ndarray, x1: np.ndarray, v1: np.ndarray, inv_mass, dt: float, resting=()

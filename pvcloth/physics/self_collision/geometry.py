@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from pvcloth.physics.self_collision._compiled import njit
 
 # -- closest points (3-vectors as tuples: values, never allocated) ------------------
@@ -228,3 +230,40 @@ def _moved_apart(kind, i0, i1, i2, i3, x0, x):  # pragma: no cover
     m1 = math.sqrt(_dot(r1, r1))
     m23 = math.sqrt(max(_dot(r2, r2), _dot(r3, r3)))
     return max(m1, m23) if kind == 0 else m1 + m23
+
+
+@njit(cache=True)
+def linearise(pairs, triangles, edges, cells, x, inv_mass, thickness, crease):  # pragma: no cover
+    """Each pair ``(kind, first, second)`` of ``pairs`` (``(P, 3)``) fixed
+    at ``x``: its corners (``(P, 4)``), closest-point weights (``(P, 4)``,
+    the first primitive's positive), unit direction from the second
+    primitive's closest point to the first's (``(P, 3)``), the distance it
+    is to be kept at (m, ``(P,)``: the ``thickness``, ``crease`` times it
+    across a crease) and its effective
+    mass (kg, ``(P,)``: ``1 / sum_k w_k^2 / m_k``; zero when no corner may
+    move, or when the primitives touch and leave no side). Along that
+    fixed direction with those fixed weights, a pair's distance is linear
+    in the positions: ``sum_k w_k n . x_k``."""
+    count = pairs.shape[0]
+    corners = np.empty((count, 4), np.int64)
+    weights = np.empty((count, 4))
+    direction = np.zeros((count, 3))
+    target = np.empty(count)
+    mass = np.zeros(count)
+    for n in range(count):
+        kind = pairs[n, 0]
+        i0, i1, i2, i3 = _corners(kind, pairs[n, 1], pairs[n, 2], triangles, edges)
+        w, gap = _closest(kind, i0, i1, i2, i3, x, x, 0.0)
+        corners[n, 0], corners[n, 1], corners[n, 2], corners[n, 3] = i0, i1, i2, i3
+        share = 0.0
+        for k in range(4):
+            weights[n, k] = w[k]
+            share += w[k] * w[k] * inv_mass[corners[n, k]]
+        length = math.sqrt(_dot(gap, gap))
+        target[n] = (crease if _crease(kind, i0, i1, i2, i3, cells) else 1.0) * thickness
+        if share == 0.0 or length <= 1e-9 * thickness:
+            continue
+        mass[n] = 1.0 / share
+        for a in range(3):
+            direction[n, a] = gap[a] / length
+    return corners, weights, direction, target, mass

@@ -120,3 +120,54 @@ def respond(
         if touched == 0:
             break
     return contacts
+
+
+# -- friction of pairs a solve held ------------------------------------------------
+
+
+@njit(cache=True)
+def rub(corners, weights, direction, pushed, x, v, inv_mass, friction, lever):  # pragma: no cover
+    """Coulomb friction on pairs an integrator's solve held apart with a
+    penalty, in place on ``x`` (m) and ``v`` (m/s), one Gauss-Seidel sweep:
+    each pair's relative tangential velocity ``sum_k w_k v_k`` (corners
+    ``(P, 4)``, weights ``(P, 4)``, unit normal ``direction`` ``(P, 3)``) is
+    stopped while it is within ``friction`` times the normal change of
+    relative velocity the push gave it over the step (``pushed``, m/s,
+    ``(P,)``), and slowed by that much beyond. The change is shared by the
+    corners as the proximity response shares its own, and each corner
+    moves ``lever`` (s) times its change of velocity, as the solve would
+    have moved it. Returns the pairs that stuck."""
+    ids = np.empty(4, np.int64)
+    free = np.empty(4)
+    stuck = 0
+    for p in range(corners.shape[0]):
+        if pushed[p] <= 0.0:
+            continue
+        share = 0.0
+        rel = [0.0, 0.0, 0.0]
+        for k in range(4):
+            i = corners[p, k]
+            ids[k] = i
+            free[k] = inv_mass[i]
+            share += weights[p, k] * weights[p, k] * free[k]
+            for a in range(3):
+                rel[a] += weights[p, k] * v[i, a]
+        if share == 0.0:
+            continue
+        normal = (direction[p, 0], direction[p, 1], direction[p, 2])
+        vn = rel[0] * normal[0] + rel[1] * normal[1] + rel[2] * normal[2]
+        tangent = (rel[0] - vn * normal[0], rel[1] - vn * normal[1], rel[2] - vn * normal[2])
+        slide = math.sqrt(_dot(tangent, tangent))
+        limit = friction * pushed[p]
+        stop = 1.0 if slide <= limit else limit / slide
+        stuck += slide <= limit
+        for k in range(4):
+            scale = _scale(weights[p, k], free[k], share)
+            if scale == 0.0:
+                continue
+            i = ids[k]
+            for a in range(3):
+                dv = scale * stop * tangent[a]
+                v[i, a] -= dv
+                x[i, a] -= lever * dv
+    return stuck

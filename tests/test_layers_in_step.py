@@ -1,0 +1,160 @@
+"""The cloth's layers inside Newton's solve (``LayerPenalty``): its force is
+its potential's slope and its Hessian the force's, the friction after the
+step keeps Coulomb's law and momentum, and a towel folded on itself rests
+at one step a frame with nothing left for the response after the step."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from intersections import count_self_intersections
+
+from pvcloth.physics.integrators import penalties
+from pvcloth.physics.self_collision import SelfCollision
+from pvcloth.physics.self_collision.response import rub
+
+THICKNESS = 0.004
+
+
+def two_layers(rng, squeeze=0.5):
+    """A 3x6 grid whose left half lies over its right half (folded at the
+    middle), ``THICKNESS + squeeze`` penalty layers above it, a little
+    rumpled: ``(contact, positions, every VF pair)``."""
+    ny, nx = 3, 6
+    contact = SelfCollision((ny, nx), THICKNESS, friction=0.3)
+    spacing = 0.02
+    x = np.zeros((ny * nx, 3))
+    layer = penalties.PENALTY_LAYER * THICKNESS
+    for row in range(ny):
+        for col in range(nx):
+            i = row * nx + col
+            mirror = nx - 1 - col if col < nx // 2 else col
+            height = THICKNESS + squeeze * layer if col < nx // 2 else 0.0
+            x[i] = (mirror * spacing, row * spacing, height)
+    x += 1e-4 * rng.normal(size=x.shape)
+    points = np.arange(ny * nx)
+    pairs = [
+        (0, p, t)
+        for p in points
+        for t in range(len(contact.triangles))
+        if p not in contact.triangles[t]
+    ]
+    return contact, x, np.array(pairs, np.int64)
+
+
+def test_the_layers_penalty_force_is_its_potential_s_slope_and_its_hessian_the_force_s():
+    """``add_force`` is minus the slope of ``change`` along random moves
+    (central differences), and ``hessian`` is minus the force's slope:
+    the gap along the pair's fixed direction is linear, so the Hessian is
+    exact where the layers press."""
+    rng = np.random.default_rng(5)
+    contact, x, pairs = two_layers(rng)
+    inv_mass = np.full(len(x), 100.0)
+    inv_mass[0] = 0.0  # a pinned corner: its pairs take the others' mass
+    penalty = penalties.LayerPenalty(contact, pairs, x, x, inv_mass, 1 / 60)
+    force = np.zeros_like(x)
+    penalty.add_force(x, force)
+    assert penalty.held(x).pushed.size >= 6  # the layers press
+    assert np.abs(force.sum(axis=0)).max() < 1e-9 * np.abs(force).max()  # action, reaction
+    eps = 1e-9
+    for _ in range(5):
+        move = rng.normal(size=x.shape)
+        ahead, behind = penalty.change(x, x + eps * move), penalty.change(x, x - eps * move)
+        assert (ahead - behind) / (2 * eps) == pytest.approx(-np.vdot(force, move), rel=1e-5)
+    hessian = penalty.hessian(x).toarray()
+    np.testing.assert_allclose(hessian, hessian.T)
+    for _ in range(5):
+        move = 1e-9 * rng.normal(size=x.shape)
+        ahead, behind = np.zeros_like(x), np.zeros_like(x)
+        penalty.add_force(x + move, ahead)
+        penalty.add_force(x - move, behind)
+        np.testing.assert_allclose(
+            hessian @ move.ravel(), -(ahead - behind).ravel() / 2, rtol=1e-5, atol=1e-9
+        )
+
+
+def test_the_layers_rest_in_the_penalty_s_layer_outside_the_thickness():
+    """A pair pressed by ``m g`` sinks ``sqrt(g l) / omega`` into the layer
+    (the cubic law ``k D^2 / l = m g``, ``k = m omega^2``): far less than
+    the layer, so the response after the step (at the thickness) finds
+    nothing to push."""
+    layer = penalties.PENALTY_LAYER * THICKNESS
+    scale = max(layer, penalties.PENALTY_SCALE)
+    mass = 0.01
+    stiffness = np.array([mass * penalties.PENALTY_FREQUENCY**2])
+    law = penalties.PenaltyLaw(stiffness, layer, np.array([0.0]), 1 / 60, damped=False)
+    sink = np.sqrt(9.81 * scale) / penalties.PENALTY_FREQUENCY
+    assert law.force(np.array([layer - sink]))[0] == pytest.approx(mass * 9.81, rel=1e-12)
+    assert sink < 0.1 * layer
+
+
+def test_friction_between_held_layers_sticks_within_the_cone_and_slides_at_the_coulomb_rate():
+    """One pair, a point over a triangle's middle: a relative tangential
+    velocity within ``friction`` times the push's normal change is stopped,
+    one beyond it is slowed by exactly that much; momentum is kept and the
+    normal velocity is left as the solve made it."""
+    rng = np.random.default_rng(2)
+    corners = np.array([[0, 1, 2, 3]])
+    weights = np.array([[1.0, -1 / 3, -1 / 3, -1 / 3]])
+    normal = np.array([[0.0, 0.0, 1.0]])
+    mass = np.array([0.02, 0.01, 0.03, 0.015])
+    for slide, sticks in ((0.01, True), (0.2, False)):
+        v = 0.05 * rng.normal(size=(4, 3))
+        tangential = np.array([slide, 0.0, 0.0]) - (weights[0] @ v) * [1, 1, 0]
+        v[0] += tangential  # the pair's relative tangential velocity is (slide, 0)
+        x = rng.normal(size=(4, 3))
+        before_v, before_x = v.copy(), x.copy()
+        pushed = np.array([0.1])  # m/s: the limit is 0.03 m/s
+        stuck = rub(corners, weights, normal, pushed, x, v, 1 / mass, 0.3, 0.01)
+        assert stuck == int(sticks)
+        relative = weights[0] @ v
+        expected = 0.0 if sticks else slide - 0.3 * 0.1
+        normal_before = weights[0] @ before_v[:, 2]
+        np.testing.assert_allclose(relative, [expected, 0.0, normal_before], atol=1e-12)
+        np.testing.assert_allclose(mass @ v, mass @ before_v, atol=1e-15)
+        np.testing.assert_allclose(x - before_x, 0.01 * (v - before_v), atol=1e-15)
+
+
+def resting_towel(n, mode):
+    """The towel of ``tests/contact_scenes.py`` folded and let go, played
+    by ``bdf2`` at one 1/60 s step a frame to 3 s, the layers in its solve
+    (``mode`` "in") or after the step only ("after"): ``(simulation, worst
+    count of intersections, largest kinetic energy (J) and the response's
+    pushes over the last second)``."""
+    from contact_scenes import towel_fold
+
+    sim, drive = towel_fold(n, "bdf2")
+    sim.integrator.contact_in_step = mode == "in"
+    worst = pushes = 0
+    kinetic = 0.0
+    while sim.state.t < 3.0 - 1e-9:
+        drive(sim)
+        sim.advance(1 / 60)
+        worst = max(worst, count_self_intersections(sim.state.x, sim.resolution))
+        if sim.state.t > 2.0:
+            pushes += sim.model.self_collision.report.contacts
+            kinetic = max(kinetic, sim.model.kinetic_energy(sim.velocities))
+    return sim, worst, kinetic, pushes
+
+
+@pytest.mark.parametrize("n", [16, pytest.param(32, marks=pytest.mark.validation)])
+def test_a_towel_folded_on_itself_rests_at_one_step_a_frame(n):
+    """With the layers in the solve, the fold comes to rest at one 1/60 s
+    step a frame (no split for contact), its top layer held in the
+    penalty's layer: over the third second the response after the step
+    pushes nothing, nothing intersects, and the kinetic energy stays under
+    a hundredth of the whole cloth's after one step of free fall (the bound
+    of ``test_a_folded_towel_at_rest_does_not_chatter``). After the step
+    alone (32x32), the top layer falls into the bottom one every step and
+    is pushed back: it stays over that bound."""
+    sim, worst, kinetic, pushes = resting_towel(n, "in")
+    bound = 0.01 * 0.5 * sim.scene.cloth.mass * (9.81 / 60) ** 2
+    assert sim.dt == pytest.approx(1 / 60) and sim.contact_step() == np.inf
+    assert worst == 0 and pushes == 0
+    assert len(sim.integrator.held_layers(sim.state.x).pushed) > n  # the layers do press
+    assert sim.positions[:, 2].max() > 0.02  # still folded
+    assert kinetic < bound, f"kinetic energy {kinetic:.2e} J at rest, bound {bound:.2e} J"
+    if n >= 32:
+        after, worst_after, jitter, pushes_after = resting_towel(n, "after")
+        assert worst_after == 0 and pushes_after > 0
+        assert jitter > bound
