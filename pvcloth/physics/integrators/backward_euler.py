@@ -59,13 +59,15 @@ class BackwardEuler(Integrator):
     is kept from one iteration to the next while the residual at least
     halves (a chord step).
 
-    With obstacles the potential holds a penalty for each
-    (:class:`~pvcloth.physics.integrators.penalties.ObstaclePenalty`), and
-    with self-collision one for each pair of layers the step may bring
-    close (:class:`~pvcloth.physics.integrators.penalties.LayerPenalty`),
-    so the solve sees what holds the cloth up and no step is split for
-    self-collision; the response after the step stays as the fail-safe and
-    applies the friction.
+    With obstacles (and no self-collision) the potential holds a penalty
+    for each (:class:`~pvcloth.physics.integrators.penalties.ObstaclePenalty`),
+    so the solve sees what holds the cloth; the response after the step
+    stays as the fail-safe and applies the friction. With
+    :attr:`layers_in_step` on, it holds one for each pair of layers the
+    step may bring close as well
+    (:class:`~pvcloth.physics.integrators.penalties.LayerPenalty`), the
+    obstacles' too with self-collision, and no step is split for
+    self-collision.
 
     A step has converged when no point is left with an unbalanced
     acceleration (``r / h^2``, the force the step leaves unbalanced over the
@@ -117,10 +119,16 @@ class BackwardEuler(Integrator):
         #: Whether the obstacles and the layers enter the solve (False: after
         #: the step only, as the explicit integrators have them).
         self.contact_in_step = True
+        #: Whether the layers enter the solve too (:class:`LayerPenalty`; the
+        #: obstacles then stay in it with self-collision). Off by default:
+        #: Newton stalls with them in violent scenes at 32x32 (a crumple, a
+        #: twist, a dragged corner, a skirt folding on a ball), which
+        #: converge with the layers after the step.
+        self.layers_in_step = False
 
     @property
     def holds_layers(self) -> bool:
-        return self.contact_in_step
+        return self.contact_in_step and self.layers_in_step
 
     def held_layers(self, x: np.ndarray):
         return None if self.layers is None else self.layers.held(x)
@@ -176,12 +184,14 @@ class BackwardEuler(Integrator):
         if self._pattern is None or self._pattern[0] != model.serial:
             self._pattern = (model.serial, BlockPattern(table.a, table.b, model.n_points))
         end_time = t + dt if end_time is None else end_time
-        penalties = []
         self.penalty = self.layers = None
-        if self.contact_in_step:
+        # With the layers after the step, the obstacles stay after it too: a
+        # floor inside the solve would bear the lowest layer's weight alone
+        # while the layers above drag it (a folded towel crept down a slope).
+        if self.contact_in_step and (model.self_collision is None or self.layers_in_step):
             self.penalty = ObstaclePenalty.build(model, control, x, dt, guess, end_time)
             self.layers = LayerPenalty.build(model, control, x, dt, guess, positions)
-            penalties = [p for p in (self.penalty, self.layers) if p is not None]
+        penalties = [p for p in (self.penalty, self.layers) if p is not None]
         potential = _StepPotential(model, x, v, dt, control.inv_mass, self._pattern[1], penalties)
         potential.anchor(guess)
         residual = potential.residual(guess)
