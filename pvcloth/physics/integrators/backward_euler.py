@@ -113,8 +113,8 @@ class BackwardEuler(Integrator):
         #: The obstacles' penalty of the last step's solve (None without
         #: obstacles): see :class:`ObstaclePenalty`.
         self.penalty: ObstaclePenalty | None = None
-        #: The layers' penalty of the last step's solve (None without
-        #: self-collision): see :class:`LayerPenalty`.
+        #: The layers' penalty of the last step's solve (None unless
+        #: :attr:`layers_in_step`, with self-collision): see :class:`LayerPenalty`.
         self.layers: LayerPenalty | None = None
         #: Whether the obstacles and the layers enter the solve (False: after
         #: the step only, as the explicit integrators have them).
@@ -122,8 +122,8 @@ class BackwardEuler(Integrator):
         #: Whether the layers enter the solve too (:class:`LayerPenalty`; the
         #: obstacles then stay in it with self-collision). Off by default:
         #: Newton stalls with them in violent scenes at 32x32 (a crumple, a
-        #: twist, a dragged corner, a skirt folding on a ball), which
-        #: converge with the layers after the step.
+        #: twist, a skirt folding on a ball), which converge with the layers
+        #: after the step.
         self.layers_in_step = False
 
     @property

@@ -5,8 +5,10 @@ other (:class:`LayerPenalty`).
 
 Both use one law along a gap ``g`` (m) per row (:class:`PenaltyLaw`): a
 cubic penalty in a thin layer outside the shape the response after the step
-keeps, and a Hunt and Crossley dashpot taken at the step's end, so that the
-force is the gap's derivative of a potential and Newton sees all of it. The
+keeps, with (for the obstacles) a Hunt and Crossley dashpot taken at the
+step's end, so that the force is the gap's derivative of a potential and
+Newton sees all of it. The layers' enter only on request
+(``BackwardEuler.layers_in_step``). The
 response after the step (:mod:`~pvcloth.physics.obstacles`,
 :mod:`~pvcloth.physics.self_collision`) stays as the fail-safe that
 guarantees no point ends inside an obstacle and no layer crosses another.
@@ -221,9 +223,7 @@ class ObstaclePenalty:
     @classmethod
     def build(cls, model, control, x, dt: float, guess, end_time: float):
         """The penalty for a solve from ``x`` (m) whose first iterate is
-        ``guess``, or None (no obstacles; self-collision, which meets the
-        layers after the step: a floor in the solve would bear the lowest
-        layer's weight alone)."""
+        ``guess``, or None without obstacles."""
         if not model.obstacles:
             return None
         movable = control.movable_index
@@ -317,7 +317,8 @@ class ObstaclePenalty:
 class LayerPenalty:
     """The cloth's layers inside Newton's solve: the penalty of
     :class:`PenaltyLaw` on each pair of a point and a triangle of the
-    other layer that the step may bring close.
+    other layer that the step may bring close (with
+    ``BackwardEuler.layers_in_step`` on; off by default).
 
     The pairs are the self-collision's (its broad phase and screen,
     :class:`~pvcloth.physics.self_collision.SelfCollision`), listed once a
@@ -361,7 +362,8 @@ class LayerPenalty:
         The step's start (m, ``(N, 3)``), where each pair is fixed.
     start : numpy.ndarray
         The solve's start ``x`` (m, ``(N, 3)``; BDF2's combination of its
-        last two states), where the dashpot takes its gaps.
+        last two states), where the law takes its start gaps (which only a
+        dashpot would use).
     inv_mass : numpy.ndarray
         ``(N,)`` (1/kg), zero for pinned points.
     dt : float
