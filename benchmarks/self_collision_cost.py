@@ -21,13 +21,16 @@ ratio on / off: the cost of a simulated second, whatever the steps. On and
 off take turns of ``BLOCK`` frames, so a slow spell of the machine falls on
 both.
 
+With ``--layers-in-solve``, ``backward_euler`` or ``bdf2`` hold the layers
+in their solve with self-collision on (``layers_in_step``: no step split).
+
 With ``--integrator`` another integrator is timed from the same states
 (each at its automatic step, the contact step bound applying as above): an
 explicit one takes the many steps its stability asks for, and its
 self-collision runs after every one of them.
 
 Run:  python benchmarks/self_collision_cost.py [--sizes 32 64 128] [--steps 40]
-      [--integrator symplectic_euler]
+      [--integrator symplectic_euler] [--layers-in-solve]
       (writes benchmarks/results/self_collision_cost.md, with another
       integrator benchmarks/results/self_collision_cost_INTEGRATOR.md)
 """
@@ -120,6 +123,11 @@ def main() -> None:
         "--integrator", default="fast_mass_spring", help="the integrator timed (its automatic step)"
     )
     parser.add_argument(
+        "--layers-in-solve",
+        action="store_true",
+        help="backward_euler or bdf2 with the layers in its solve (layers_in_step), on",
+    )
+    parser.add_argument(
         "--out",
         help="the results file (default benchmarks/results/self_collision_cost.md, with "
         "another integrator self_collision_cost_INTEGRATOR.md)",
@@ -133,6 +141,8 @@ def main() -> None:
         for name, scene, start in starts(n, args.settle, args.windy, args.cases):
             scene = scene.with_overrides({"solver.integrator": args.integrator, "solver.dt": None})
             on = Simulation(scene)
+            if args.layers_in_solve:
+                on.integrator.layers_in_step = True
             off = Simulation(scene.replace(self_collision=None))
             for sim in (on, off):
                 sim.set_state(start.state.x, start.state.v)
@@ -150,7 +160,8 @@ def main() -> None:
         "",
         f"`{' '.join(['python benchmarks/self_collision_cost.py', *sys.argv[1:]])}` "
         f"(sizes {' '.join(map(str, args.sizes))}, cases {' '.join(args.cases)}, "
-        f"{args.steps} frames timed, fold settled {args.settle:g} s, windy {args.windy:g} s); "
+        f"{args.steps} frames timed, fold settled {args.settle:g} s, windy {args.windy:g} s"
+        f"{', the layers in the solve' if args.layers_in_solve else ''}); "
         f"median ms per 1/60 s frame of `{args.integrator}` (its automatic step off; on, the "
         "steps the "
         "self-collision step bound asks for), on and off measured side by side from the "
