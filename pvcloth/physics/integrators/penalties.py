@@ -22,9 +22,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from pvcloth.physics.obstacles import Contacts
-from pvcloth.physics.self_collision.geometry import linearise
-from pvcloth.physics.self_collision.pairs import screen
-from pvcloth.physics.self_collision.response import CREASE
 
 #: ``omega`` (rad/s): the penalty's stiffness per point over its mass is
 #: ``omega^2`` at the depth scale. A point arriving at speed ``v`` stops
@@ -372,10 +369,7 @@ class LayerPenalty:
 
     def __init__(self, contact, pairs, positions, start, inv_mass, dt: float):
         self.contact = contact
-        corners, weights, direction, target, mass = linearise(
-            pairs, contact.triangles, contact.edges, contact._cells, positions, inv_mass,
-            contact.thickness, CREASE,
-        )  # fmt: skip
+        corners, weights, direction, target, mass = contact.linearise(pairs, positions, inv_mass)
         kept = mass > 0.0
         self.pairs = pairs[kept]
         #: ``(P, 4)``: each pair's point, then its triangle's corners.
@@ -406,14 +400,8 @@ class LayerPenalty:
         fall = dt * dt * float(np.linalg.norm(model.gravity.acceleration)) if model.gravity else 0.0
         near = PENALTY_LAYER * contact.thickness
         reach = fall + near
-        listed = contact._build(positions, guess, reach)
-        count = int(np.searchsorted(listed.rows[:, 0], 1))  # sorted: the VF rows first
-        rows = listed.rows[:count]
-        close = screen(
-            rows, listed.gaps[:count], listed.anchor, positions, guess, contact.triangles,
-            contact.edges, reach, contact.thickness + near,
-        )  # fmt: skip
-        return cls(contact, rows[close], positions, x, control.inv_mass, dt)
+        pairs = contact.point_triangle_pairs(positions, guess, reach, contact.thickness + near)
+        return cls(contact, pairs, positions, x, control.inv_mass, dt)
 
     def gaps(self, t: np.ndarray) -> np.ndarray:
         """Each pair's gap (m, ``(P,)``) at ``t``: ``sum_k w_k n . t_k - T``."""

@@ -118,7 +118,7 @@ import numpy as np
 from pvcloth.errors import DivergenceError
 from pvcloth.physics import topology
 from pvcloth.physics.self_collision.continuous import approaches, impulses
-from pvcloth.physics.self_collision.geometry import point_triangle, segment_segment
+from pvcloth.physics.self_collision.geometry import linearise, point_triangle, segment_segment
 from pvcloth.physics.self_collision.pairs import (
     PairList,
     box_pairs,
@@ -130,7 +130,7 @@ from pvcloth.physics.self_collision.pairs import (
     screen,
     sort_rows,
 )
-from pvcloth.physics.self_collision.response import respond, rub
+from pvcloth.physics.self_collision.response import CREASE, respond, rub
 from pvcloth.physics.self_collision.zones import ZoneArrays, impact_zones, new_zones
 
 #: The margin ``eta`` as a share of the thickness.
@@ -216,6 +216,32 @@ class SelfCollision:
         0.0132
         """
         return math.inf if gravity <= 0.0 else math.sqrt(self.reach / gravity)
+
+    def point_triangle_pairs(
+        self, x0: np.ndarray, x1: np.ndarray, reach: float, within: float
+    ) -> np.ndarray:
+        """Rows ``(0, point, triangle)`` (``(P, 3)``, int64) of the VF
+        pairs that may come within ``within`` (m) over the straight paths
+        ``x0 -> x1`` (m, ``(N, 3)``) grown by ``reach`` (m): steps 1 and 2
+        of the module docstring for those distances, ``x0`` the anchor."""
+        listed = self._build(x0, x1, reach)
+        count = int(np.searchsorted(listed.rows[:, 0], 1))  # sorted: the VF rows first
+        rows = listed.rows[:count]
+        near = screen(
+            rows, listed.gaps[:count], listed.anchor, x0, x1, self.triangles, self.edges, reach,
+            within,
+        )  # fmt: skip
+        return rows[near]
+
+    def linearise(self, pairs: np.ndarray, x: np.ndarray, inv_mass) -> tuple:
+        """Each of ``pairs`` fixed at ``x`` (m, ``(N, 3)``), ``inv_mass``
+        (1/kg, ``(N,)``) saying who may move: its corners, closest-point
+        weights, unit direction, the distance it is kept at (the thickness,
+        ``CREASE`` of it across a crease) and effective mass
+        (:func:`~pvcloth.physics.self_collision.geometry.linearise`)."""
+        return linearise(
+            pairs, self.triangles, self.edges, self._cells, x, inv_mass, self.thickness, CREASE
+        )
 
     def rub(self, held, x1: np.ndarray, v1: np.ndarray, inv_mass) -> int:
         """Coulomb friction, in place on ``x1`` (m) and ``v1`` (m/s), on
