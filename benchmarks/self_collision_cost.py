@@ -22,7 +22,8 @@ off take turns of ``BLOCK`` frames, so a slow spell of the machine falls on
 both.
 
 With ``--layers-in-solve``, ``backward_euler`` or ``bdf2`` hold the layers
-in their solve with self-collision on (``layers_in_step``: no step split).
+in their solve with self-collision on (``[self_collision] in_solve``: no
+step split).
 
 With ``--integrator`` another integrator is timed from the same states
 (each at its automatic step, the contact step bound applying as above): an
@@ -38,6 +39,7 @@ Run:  python benchmarks/self_collision_cost.py [--sizes 32 64 128] [--steps 40]
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -125,7 +127,7 @@ def main() -> None:
     parser.add_argument(
         "--layers-in-solve",
         action="store_true",
-        help="backward_euler or bdf2 with the layers in its solve (layers_in_step), on",
+        help="with self-collision on, the layers in the solve ([self_collision] in_solve)",
     )
     parser.add_argument(
         "--out",
@@ -140,9 +142,10 @@ def main() -> None:
     for n in args.sizes:
         for name, scene, start in starts(n, args.settle, args.windy, args.cases):
             scene = scene.with_overrides({"solver.integrator": args.integrator, "solver.dt": None})
-            on = Simulation(scene)
             if args.layers_in_solve:
-                on.integrator.layers_in_step = True
+                contact = dataclasses.replace(scene.self_collision, in_solve=True)
+                scene = scene.replace(self_collision=contact)
+            on = Simulation(scene)
             off = Simulation(scene.replace(self_collision=None))
             for sim in (on, off):
                 sim.set_state(start.state.x, start.state.v)

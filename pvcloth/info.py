@@ -49,12 +49,15 @@ def describe(sim: Simulation) -> str:
     if layers is None:
         lines.append("contact     no self-collision (add a [self_collision] table to turn it on)")
     else:
-        held = (
-            f"steps are split to at most {contact:.3g} s (one step's fall under gravity "
-            f"within what the contact response may move a point)"
-            if math.isfinite(contact)
-            else "no limit on the step without gravity"
-        )
+        if math.isfinite(contact):
+            held = (
+                f"steps are split to at most {contact:.3g} s (one step's fall under gravity "
+                f"within what the contact response may move a point)"
+            )
+        elif layers.in_solve and sim.integrator.holds_layers:
+            held = f"{sim.integrator.name} holds the layers in its solve: no limit on the step"
+        else:
+            held = "no limit on the step without gravity"
         lines.append(
             f"contact     self-collision on: layers kept {1e3 * layers.thickness:.3g} mm apart, "
             f"friction {layers.friction:g}; {held}"

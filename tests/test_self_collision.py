@@ -130,6 +130,12 @@ def test_the_scene_file_turns_it_on_with_its_thickness():
     said = f"self-collision on: layers kept {1e3 * 0.3 * gap:.3g} mm apart, friction 0.3; "
     said += f"steps are split to at most {sim.contact_step():.3g} s"
     assert said in describe(sim)
+    # in_solve: bdf2 holds the layers in its solve and takes no split
+    held = scene.with_overrides({"self_collision.in_solve": True, "solver.integrator": "bdf2"})
+    sim = Simulation(held)
+    assert sim.model.self_collision.in_solve and sim.contact_step() == math.inf
+    assert "layers in the solve" in dict(held.summary())["self-contact"]
+    assert "bdf2 holds the layers in its solve: no limit on the step" in describe(sim)
 
 
 @pytest.mark.parametrize(
@@ -141,6 +147,7 @@ def test_the_scene_file_turns_it_on_with_its_thickness():
         ({"thickness": "thin"}, "self_collision.thickness", "expected a number"),
         ({"friction": -0.1}, "self_collision.friction", "at least 0"),
         ({"friction": 12}, "self_collision.friction", "at most 5"),
+        ({"in_solve": "yes"}, "self_collision.in_solve", "expected true or false"),
         ({"thick": 0.01}, "self_collision.thick", ""),
     ],
 )

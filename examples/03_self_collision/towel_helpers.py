@@ -32,6 +32,7 @@ def fold_a_towel(
     integrator: str = "fast_mass_spring",
     contact: bool = True,
     friction: float = 0.3,
+    in_solve: bool = False,
 ):
     """The towel on the floor, ready to fold.
 
@@ -45,6 +46,9 @@ def fold_a_towel(
         Turn self-collision on (a ``[self_collision]`` table).
     friction : float
         Coulomb friction between the towel's layers.
+    in_solve : bool
+        Hold the layers inside the solve of ``backward_euler`` and ``bdf2``
+        (``[self_collision] in_solve``).
 
     Returns
     -------
@@ -65,7 +69,9 @@ def fold_a_towel(
         }
     )
     scene = scene.replace(
-        self_collision=pvcloth.SelfCollisionSpec(friction=friction) if contact else None
+        self_collision=pvcloth.SelfCollisionSpec(friction=friction, in_solve=in_solve)
+        if contact
+        else None
     )
     sim = pvcloth.Simulation(scene)
     nx, ny = sim.resolution

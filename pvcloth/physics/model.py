@@ -378,4 +378,6 @@ def _self_collision(scene) -> SelfCollision | None:
     if contact is None:
         return None
     nx, ny = scene.cloth.resolution
-    return SelfCollision((ny, nx), contact.thickness_for(scene.cloth), contact.friction)
+    return SelfCollision(
+        (ny, nx), contact.thickness_for(scene.cloth), contact.friction, contact.in_solve
+    )

@@ -184,8 +184,10 @@ class Simulation(Clocks, LiveEdits, Pins):
         <pvcloth.physics.self_collision.SelfCollision.longest_step>`); a
         longer step is split into equal substeps under it, whatever the
         stability policy. Infinite without ``[self_collision]``, and for an
-        integrator whose solve holds the layers (``holds_layers``)."""
-        if self.integrator.holds_layers:
+        integrator whose solve holds the layers (``holds_layers``, when
+        ``[self_collision] in_solve`` asks for it)."""
+        contact = self.model.self_collision
+        if contact is not None and contact.in_solve and self.integrator.holds_layers:
             return math.inf
         return step_policy.contact_step(self.model, self.scene)
 

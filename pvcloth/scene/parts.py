@@ -644,6 +644,12 @@ class SelfCollisionSpec:
     friction : float
         Coulomb friction coefficient between layers, 0 to 5 (cloth on cloth
         is about 0.2 to 0.8).
+    in_solve : bool
+        Hold the layers apart inside the solve of ``backward_euler`` and
+        ``bdf2`` too, with a penalty (no step is then split for
+        self-collision); ``False`` (the default) meets them after the step
+        only, as every other integrator does. Newton's iterations stall in
+        some violent scenes with it.
 
     Examples
     --------
@@ -655,6 +661,7 @@ class SelfCollisionSpec:
 
     thickness: float | None = None
     friction: float = 0.3
+    in_solve: bool = False
 
     def __post_init__(self):
         if self.thickness is not None:
@@ -674,6 +681,8 @@ class SelfCollisionSpec:
             "friction",
             real("friction", self.friction, minimum=0.0, maximum=MAX_CLOTH_FRICTION),
         )
+        if not isinstance(self.in_solve, bool):
+            raise SceneError("in_solve", f"expected true or false, got {self.in_solve!r}")
 
     def thickness_for(self, cloth: ClothSpec) -> float:
         """The thickness in metres on ``cloth``'s grid (the default's share

@@ -317,7 +317,7 @@ class Scene:
         given = "" if contact.thickness is not None else " (0.3 of the grid's gap)"
         return (
             f"thickness {contact.thickness_for(self.cloth):.3g} m{given}, "
-            f"friction {contact.friction:g}"
+            f"friction {contact.friction:g}" + (", layers in the solve" if contact.in_solve else "")
         )
 
     def __repr__(self) -> str:

@@ -63,8 +63,8 @@ class BackwardEuler(Integrator):
     for each (:class:`~pvcloth.physics.integrators.penalties.ObstaclePenalty`),
     so the solve sees what holds the cloth; the response after the step
     stays as the fail-safe and applies the friction. With
-    :attr:`layers_in_step` on, it holds one for each pair of layers the
-    step may bring close as well
+    ``[self_collision] in_solve = true``, it holds one for each pair of
+    layers the step may bring close as well
     (:class:`~pvcloth.physics.integrators.penalties.LayerPenalty`), the
     obstacles' too with self-collision, and no step is split for
     self-collision.
@@ -113,22 +113,16 @@ class BackwardEuler(Integrator):
         #: The obstacles' penalty of the last step's solve (None without
         #: obstacles): see :class:`ObstaclePenalty`.
         self.penalty: ObstaclePenalty | None = None
-        #: The layers' penalty of the last step's solve (None unless
-        #: :attr:`layers_in_step`, with self-collision): see :class:`LayerPenalty`.
+        #: The layers' penalty of the last step's solve (None unless the
+        #: scene's self-collision asks for it, ``in_solve``): see :class:`LayerPenalty`.
         self.layers: LayerPenalty | None = None
         #: Whether the obstacles and the layers enter the solve (False: after
         #: the step only, as the explicit integrators have them).
         self.contact_in_step = True
-        #: Whether the layers enter the solve too (:class:`LayerPenalty`; the
-        #: obstacles then stay in it with self-collision). Off by default:
-        #: Newton stalls with them in violent scenes at 32x32 (a crumple, a
-        #: twist, a skirt folding on a ball), which converge with the layers
-        #: after the step.
-        self.layers_in_step = False
 
     @property
     def holds_layers(self) -> bool:
-        return self.contact_in_step and self.layers_in_step
+        return self.contact_in_step
 
     def held_layers(self, x: np.ndarray):
         return None if self.layers is None else self.layers.held(x)
@@ -188,7 +182,8 @@ class BackwardEuler(Integrator):
         # With the layers after the step, the obstacles stay after it too: a
         # floor inside the solve would bear the lowest layer's weight alone
         # while the layers above drag it (a folded towel crept down a slope).
-        if self.contact_in_step and (model.self_collision is None or self.layers_in_step):
+        layers = model.self_collision is not None and model.self_collision.in_solve
+        if self.contact_in_step and (model.self_collision is None or layers):
             self.penalty = ObstaclePenalty.build(model, control, x, dt, guess, end_time)
             self.layers = LayerPenalty.build(model, control, x, dt, guess, positions)
         penalties = [p for p in (self.penalty, self.layers) if p is not None]

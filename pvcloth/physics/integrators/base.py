@@ -88,9 +88,10 @@ class Integrator(ABC):
         (:mod:`pvcloth.physics.blas`); the explicit steps skip that cost
         (about 20 us, a sixth of a 32x32 step).
     holds_layers : bool
-        Whether its own solve holds one layer of the cloth up on another
-        (:class:`~pvcloth.physics.integrators.penalties.LayerPenalty`): then
-        no step is split for self-collision
+        Whether its own solve can hold one layer of the cloth up on another
+        (:class:`~pvcloth.physics.integrators.penalties.LayerPenalty`), as
+        it does when the scene asks (``[self_collision] in_solve``): then no
+        step is split for self-collision
         (:meth:`~pvcloth.physics.simulation.Simulation.contact_step`).
     """
 
@@ -173,7 +174,8 @@ class Integrator(ABC):
         """The pairs of layers its last step's own solve held apart
         (:class:`~pvcloth.physics.integrators.penalties.HeldPairs`, their
         normals at positions ``x``, m, ``(N, 3)``), for friction after the
-        step; None unless the layers enter its solve (:attr:`holds_layers`)."""
+        step; None unless the layers enter its solve (:attr:`holds_layers`
+        and the scene's ``[self_collision] in_solve``)."""
         return None
 
     def get_state(self) -> dict[str, np.ndarray]:

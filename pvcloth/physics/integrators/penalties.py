@@ -8,7 +8,7 @@ cubic penalty in a thin layer outside the shape the response after the step
 keeps, with (for the obstacles) a Hunt and Crossley dashpot taken at the
 step's end, so that the force is the gap's derivative of a potential and
 Newton sees all of it. The layers' enter only on request
-(``BackwardEuler.layers_in_step``). The
+(``[self_collision] in_solve``). The
 response after the step (:mod:`~pvcloth.physics.obstacles`,
 :mod:`~pvcloth.physics.self_collision`) stays as the fail-safe that
 guarantees no point ends inside an obstacle and no layer crosses another.
@@ -315,7 +315,7 @@ class LayerPenalty:
     """The cloth's layers inside Newton's solve: the penalty of
     :class:`PenaltyLaw` on each pair of a point and a triangle of the
     other layer that the step may bring close (with
-    ``BackwardEuler.layers_in_step`` on; off by default).
+    ``[self_collision] in_solve = true``; off by default).
 
     The pairs are the self-collision's (its broad phase and screen,
     :class:`~pvcloth.physics.self_collision.SelfCollision`), listed once a

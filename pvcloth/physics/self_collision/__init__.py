@@ -168,6 +168,9 @@ class SelfCollision:
         Distance (m) the layers are kept apart.
     friction : float
         Coulomb friction coefficient between layers (>= 0).
+    in_solve : bool
+        Whether an integrator that can (``Integrator.holds_layers``) holds
+        the layers inside its solve as well.
 
     Attributes
     ----------
@@ -179,10 +182,13 @@ class SelfCollision:
         What the last :meth:`resolve` did.
     """
 
-    def __init__(self, shape: tuple[int, int], thickness: float, friction: float):
+    def __init__(
+        self, shape: tuple[int, int], thickness: float, friction: float, in_solve: bool = False
+    ):
         self.shape = tuple(shape)
         self.thickness = float(thickness)
         self.friction = float(friction)
+        self.in_solve = bool(in_solve)
         self.reach = 0.5 * self.thickness
         self.triangles = topology.triangles(self.shape)
         self.edges = topology.edges(self.shape)
