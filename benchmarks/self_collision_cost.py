@@ -137,6 +137,7 @@ def main() -> None:
     args = parser.parse_args()
     if args.out is None:
         named = "" if args.integrator == "fast_mass_spring" else f"_{args.integrator}"
+        named += "_in_solve" if args.layers_in_solve else ""
         args.out = str(HERE / "results" / f"self_collision_cost{named}.md")
     rows = []
     for n in args.sizes:

@@ -172,8 +172,9 @@ class Integrator(ABC):
 
     def held_layers(self, x: np.ndarray):
         """The pairs of layers its last step's own solve held apart
-        (:class:`~pvcloth.physics.integrators.penalties.HeldPairs`, their
-        normals at positions ``x``, m, ``(N, 3)``), for friction after the
+        (:class:`~pvcloth.physics.integrators.penalties.HeldPairs`: those
+        pressed at positions ``x``, m, ``(N, 3)``, with the weights and
+        normals the solve fixed at the step's start), for friction after the
         step; None unless the layers enter its solve (:attr:`holds_layers`
         and the scene's ``[self_collision] in_solve``)."""
         return None

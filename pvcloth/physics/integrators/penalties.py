@@ -7,7 +7,7 @@ Both use one law along a gap ``g`` (m) per row (:class:`PenaltyLaw`): a
 cubic penalty in a thin layer outside the shape the response after the step
 keeps, with (for the obstacles) a Hunt and Crossley dashpot taken at the
 step's end, so that the force is the gap's derivative of a potential and
-Newton sees all of it. The layers' enter only on request
+Newton sees all of it. The layers' penalty enters only on request
 (``[self_collision] in_solve``). The
 response after the step (:mod:`~pvcloth.physics.obstacles`,
 :mod:`~pvcloth.physics.self_collision`) stays as the fail-safe that
@@ -122,8 +122,7 @@ class PenaltyLaw:
         alone, wherever it is negative, made the Hessian inexact over much
         of a landing: with a folded towel's layers pressing its bottom one
         onto the floor (``bdf2``, 32x32), Newton then converged linearly
-        and stopped 0.1 m/s^2 short of its tolerance after 200
-        iterations."""
+        and stopped short of its tolerance."""
         depth = self.depth(gap)
         moved = gap - self.start_gap
         damped = self.damping * depth * (depth - 2 * moved) / self.dt
@@ -340,12 +339,12 @@ class LayerPenalty:
     Friction between the layers is not in the potential (see
     :meth:`held`).
 
-    Unlike the obstacles' penalty it has no dashpot. Taken at the step's
-    end, with its curvature then clamped apart from the penalty's, in
-    a towel being folded (``bdf2``, 24x24, taking over at 0.9 s) Newton then
-    converged linearly, 0.007 m/s^2 short of its tolerance after 200
-    iterations; the 16x16 towel at rest kept swinging at about 1e-5 J.
-    Without it both converge, and the towel rests to round-off: the
+    Unlike the obstacles' penalty it has no dashpot. With one (the
+    obstacles', at the step's end), Newton stopped short of its tolerance
+    in a towel being folded by ``bdf2``: with the dashpot's curvature
+    clamped apart from the penalty's it converged linearly, and with the
+    two clamped together it found no descent where the 16x16 towel's
+    layers landed. Without it the towel rests to round-off at 16x16: the
     implicit step's own damping takes the landing of one layer on another
     at frame steps.
 
@@ -368,10 +367,8 @@ class LayerPenalty:
     """
 
     def __init__(self, contact, pairs, positions, start, inv_mass, dt: float):
-        self.contact = contact
         corners, weights, direction, target, mass = contact.linearise(pairs, positions, inv_mass)
         kept = mass > 0.0
-        self.pairs = pairs[kept]
         #: ``(P, 4)``: each pair's point, then its triangle's corners.
         self.corners = corners[kept]
         #: ``(P, 4)``: the closest points' weights, the point's positive.
@@ -408,7 +405,7 @@ class LayerPenalty:
         return np.einsum("pkc,pkc->p", self.slope, t[self.corners]) - self.target
 
     def change(self, t: np.ndarray, trial: np.ndarray) -> float:
-        """The penalty's and its dashpot's ``E(trial) - E(t)`` (J)."""
+        """The penalty's ``E(trial) - E(t)`` (J)."""
         return self.law.change(self.gaps(trial), self.gaps(t))
 
     def add_force(self, t: np.ndarray, force: np.ndarray) -> None:
@@ -441,7 +438,7 @@ class LayerPenalty:
     def held(self, x: np.ndarray) -> HeldPairs:
         """The pairs the penalty pushes on at ``x`` (m), with the normal
         change of relative velocity the push gave each over the step (m/s:
-        ``h f / m``, ``f`` the penalty's force less its dashpot's, ``m`` the
+        ``h f / m``, ``f`` the penalty's force, ``m`` the
         pair's effective mass), for friction after the step
         (:func:`~pvcloth.physics.self_collision.response.rub`)."""
         gap = self.gaps(x)
