@@ -21,17 +21,13 @@ ratio on / off: the cost of a simulated second, whatever the steps. On and
 off take turns of ``BLOCK`` frames, so a slow spell of the machine falls on
 both.
 
-With ``--layers-in-solve``, ``backward_euler`` or ``bdf2`` hold the layers
-in their solve with self-collision on (``[self_collision] in_solve``: no
-step split).
-
 With ``--integrator`` another integrator is timed from the same states
 (each at its automatic step, the contact step bound applying as above): an
 explicit one takes the many steps its stability asks for, and its
 self-collision runs after every one of them.
 
 Run:  python benchmarks/self_collision_cost.py [--sizes 32 64 128] [--steps 40]
-      [--integrator symplectic_euler] [--layers-in-solve]
+      [--integrator symplectic_euler]
       (writes benchmarks/results/self_collision_cost.md, with another
       integrator benchmarks/results/self_collision_cost_INTEGRATOR.md)
 """
@@ -39,7 +35,6 @@ Run:  python benchmarks/self_collision_cost.py [--sizes 32 64 128] [--steps 40]
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -125,11 +120,6 @@ def main() -> None:
         "--integrator", default="fast_mass_spring", help="the integrator timed (its automatic step)"
     )
     parser.add_argument(
-        "--layers-in-solve",
-        action="store_true",
-        help="with self-collision on, the layers in the solve ([self_collision] in_solve)",
-    )
-    parser.add_argument(
         "--out",
         help="the results file (default benchmarks/results/self_collision_cost.md, with "
         "another integrator self_collision_cost_INTEGRATOR.md)",
@@ -137,15 +127,11 @@ def main() -> None:
     args = parser.parse_args()
     if args.out is None:
         named = "" if args.integrator == "fast_mass_spring" else f"_{args.integrator}"
-        named += "_in_solve" if args.layers_in_solve else ""
         args.out = str(HERE / "results" / f"self_collision_cost{named}.md")
     rows = []
     for n in args.sizes:
         for name, scene, start in starts(n, args.settle, args.windy, args.cases):
             scene = scene.with_overrides({"solver.integrator": args.integrator, "solver.dt": None})
-            if args.layers_in_solve:
-                contact = dataclasses.replace(scene.self_collision, in_solve=True)
-                scene = scene.replace(self_collision=contact)
             on = Simulation(scene)
             off = Simulation(scene.replace(self_collision=None))
             for sim in (on, off):
@@ -164,8 +150,7 @@ def main() -> None:
         "",
         f"`{' '.join(['python benchmarks/self_collision_cost.py', *sys.argv[1:]])}` "
         f"(sizes {' '.join(map(str, args.sizes))}, cases {' '.join(args.cases)}, "
-        f"{args.steps} frames timed, fold settled {args.settle:g} s, windy {args.windy:g} s"
-        f"{', the layers in the solve' if args.layers_in_solve else ''}); "
+        f"{args.steps} frames timed, fold settled {args.settle:g} s, windy {args.windy:g} s); "
         f"median ms per 1/60 s frame of `{args.integrator}` (its automatic step off; on, the "
         "steps the "
         "self-collision step bound asks for), on and off measured side by side from the "

@@ -117,16 +117,17 @@ class PenaltyLaw:
 
     def curvature(self, gap: np.ndarray) -> np.ndarray:
         """``d^2E/dg^2`` (N/m): ``2 k D / l + beta k D (D - 2 (g - g_0)) /
-        (l h)``, clamped at zero where it is negative (a row leaving the
-        layer fast: Newton stays a descent). Clamping the dashpot's part
-        alone, wherever it is negative, made the Hessian inexact over much
-        of a landing: with a folded towel's layers pressing its bottom one
-        onto the floor (``bdf2``, 32x32), Newton then converged linearly
-        and stopped short of its tolerance."""
+        (l h)``, the dashpot's part clamped at zero where it is negative (a
+        row leaving the layer fast: Newton stays a descent). Clamping the
+        sum instead, exact wherever it is positive, let Newton rest the
+        towel's layers on the floor from a state settled by the fast solve
+        (``bdf2``, 32x32, layers in the solve) where this clamp stops short
+        of the tolerance, but ``bdf2`` then found no descent when the 6x6
+        cloth of ``benchmarks/contact_in_step.py`` landed on its sphere."""
         depth = self.depth(gap)
         moved = gap - self.start_gap
-        damped = self.damping * depth * (depth - 2 * moved) / self.dt
-        return np.maximum(2 * self.stiffness * depth / self.scale + damped, 0.0)
+        damped = self.damping * depth * np.maximum(depth - 2 * moved, 0.0) / self.dt
+        return 2 * self.stiffness * depth / self.scale + damped
 
 
 class ObstaclePenalty:
@@ -169,9 +170,8 @@ class ObstaclePenalty:
     as every other force of the step, it is the derivative along the gap of
     ``beta k (D^4 / 4 - D_0 D^3 / 3) / (l h)`` (``D_0 = d - g_0``), so it
     joins the potential exactly; its curvature, ``beta k D (D - 2 (g -
-    g_0)) / (l h)``, is negative where a point leaves the layer fast; the
-    Hessian takes the penalty's and the dashpot's curvature together,
-    clamped at zero. It vanishes at rest and where a
+    g_0)) / (l h)``, is negative where a point leaves the layer fast and
+    is clamped at zero in the Hessian. It vanishes at rest and where a
     point enters the layer, so it keeps the force's smooth start; like
     Hunt and Crossley's, it holds back a point leaving the layer faster
     than ``1 / beta``. An earlier dashpot took its coefficient at the
