@@ -7,6 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from derivatives import (
+    assert_force_is_minus_the_energy_slope,
+    assert_hessian_is_minus_the_force_derivative,
+)
 from intersections import count_self_intersections
 
 from pvcloth.physics.integrators import penalties
@@ -56,21 +60,9 @@ def test_the_layers_penalty_force_is_its_potential_s_slope_and_its_hessian_the_f
     penalty.add_force(x, force)
     assert penalty.held(x).pushed.size >= 6  # the layers press
     assert np.abs(force.sum(axis=0)).max() < 1e-9 * np.abs(force).max()  # action, reaction
-    eps = 1e-9
-    for _ in range(5):
-        move = rng.normal(size=x.shape)
-        ahead, behind = penalty.change(x, x + eps * move), penalty.change(x, x - eps * move)
-        assert (ahead - behind) / (2 * eps) == pytest.approx(-np.vdot(force, move), rel=1e-5)
-    hessian = penalty.hessian(x).toarray()
+    assert_force_is_minus_the_energy_slope(penalty, x, rng)
+    hessian = assert_hessian_is_minus_the_force_derivative(penalty, x, rng)
     np.testing.assert_allclose(hessian, hessian.T)
-    for _ in range(5):
-        move = 1e-9 * rng.normal(size=x.shape)
-        ahead, behind = np.zeros_like(x), np.zeros_like(x)
-        penalty.add_force(x + move, ahead)
-        penalty.add_force(x - move, behind)
-        np.testing.assert_allclose(
-            hessian @ move.ravel(), -(ahead - behind).ravel() / 2, rtol=1e-5, atol=1e-9
-        )
 
 
 def test_the_layers_rest_in_the_penalty_s_layer_outside_the_thickness():

@@ -224,7 +224,7 @@ class ObstaclePenalty:
             return None
         movable = control.movable_index
         move = float(np.sqrt(((guess - x) ** 2).sum(axis=1).max(initial=0.0)))
-        fall = dt * dt * float(np.linalg.norm(model.gravity.acceleration)) if model.gravity else 0.0
+        fall = one_step_fall(model, dt)
         reach = PENALTY_REACH * (move + fall)
         rows, stiffness = [], []
         for obstacle in model.obstacles:
@@ -272,11 +272,7 @@ class ObstaclePenalty:
                     cells.append(self.rows[k][pressed])
         if not blocks:
             return sp.csr_matrix((size, size))
-        block = np.concatenate(blocks)
-        point = np.concatenate(cells)
-        rows = (3 * point[:, None, None] + np.arange(3)[None, :, None]).repeat(3, axis=2)
-        cols = (3 * point[:, None, None] + np.arange(3)[None, None, :]).repeat(3, axis=1)
-        return sp.csr_matrix((block.ravel(), (rows.ravel(), cols.ravel())), shape=(size, size))
+        return block_matrix(np.concatenate(cells)[:, None], np.concatenate(blocks), size)
 
     def held(self, x: np.ndarray, t: float) -> list:
         """The points the penalty pushes on at ``x`` (m), one
@@ -394,7 +390,7 @@ class LayerPenalty:
         if contact is None:
             return None
         positions = x if positions is None else positions
-        fall = dt * dt * float(np.linalg.norm(model.gravity.acceleration)) if model.gravity else 0.0
+        fall = one_step_fall(model, dt)
         near = PENALTY_LAYER * contact.thickness
         reach = fall + near
         pairs = contact.point_triangle_pairs(positions, guess, reach, contact.thickness + near)
@@ -430,10 +426,7 @@ class LayerPenalty:
             return sp.csr_matrix((size, size))
         slope = self.slope[pressed].reshape(-1, 12)  # (P, 12): corner k, axis a
         block = curve[pressed, None, None] * slope[:, :, None] * slope[:, None, :]
-        cell = (3 * self.corners[pressed][:, :, None] + np.arange(3)).reshape(-1, 12)
-        rows = np.repeat(cell[:, :, None], 12, axis=2)
-        cols = np.repeat(cell[:, None, :], 12, axis=1)
-        return sp.csr_matrix((block.ravel(), (rows.ravel(), cols.ravel())), shape=(size, size))
+        return block_matrix(self.corners[pressed], block, size)
 
     def held(self, x: np.ndarray) -> HeldPairs:
         """The pairs the penalty pushes on at ``x`` (m), with the normal
@@ -449,6 +442,34 @@ class LayerPenalty:
             self.corners[pressed], self.weights[pressed], self.direction[pressed], pushed,
             self.law.dt,
         )  # fmt: skip
+
+
+def one_step_fall(model, dt: float) -> float:
+    """How far (m) a point at rest falls under the model's gravity in a
+    step of ``dt`` (s) of backward Euler: ``g dt^2`` (0 without gravity)."""
+    gravity = model.gravity
+    return dt * dt * float(np.linalg.norm(gravity.acceleration)) if gravity else 0.0
+
+
+def block_matrix(points: np.ndarray, blocks: np.ndarray, size: int) -> sp.csr_matrix:
+    """The ``(size, size)`` sparse sum of dense blocks: block ``b``
+    (``blocks[b]``, ``(3K, 3K)``) on the coordinates of its ``K`` points
+    ``points[b]`` (``(B, K)`` int), point by point and axis by axis.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from pvcloth.physics.integrators.penalties import block_matrix
+    >>> block = np.arange(36.0).reshape(1, 6, 6)  # points 2 and 0, in that order
+    >>> matrix = block_matrix(np.array([[2, 0]]), block, 9).toarray()
+    >>> float(matrix[6, 0]), float(matrix[0, 6])  # (point 2, x) with (point 0, x), and back
+    (3.0, 18.0)
+    """
+    width = 3 * points.shape[1]
+    cell = (3 * points[:, :, None] + np.arange(3)).reshape(-1, width)
+    rows = np.repeat(cell[:, :, None], width, axis=2)
+    cols = np.repeat(cell[:, None, :], width, axis=1)
+    return sp.csr_matrix((blocks.ravel(), (rows.ravel(), cols.ravel())), shape=(size, size))
 
 
 class HeldPairs(NamedTuple):
