@@ -66,6 +66,11 @@ RUNS = {
         ["--sizes", "8", "--steps", "2", "--settle", "1.1", "--windy", "0.1"],
         "self_collision_cost.md",
     ),
+    "self_collision_cost.py --layers-in-solve": (
+        ["--sizes", "8", "--steps", "2", "--settle", "1.1", "--cases", "resting"]
+        + ["--integrator", "bdf2", "--layers-in-solve"],
+        "self_collision_cost_bdf2_in_solve.md",
+    ),
     "startup.py": ([], "startup.md"),
     "step_allocations.py": ([], "step_allocations.md"),
     "sweep_scaling.py": ([], "sweep_scaling.md"),
