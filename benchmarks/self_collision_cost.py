@@ -155,12 +155,13 @@ def main() -> None:
     rows = []
     folder = args.integrator if args.layers_in_solve else "fast_mass_spring"
     for n in args.sizes:
-        cases = starts(n, args.settle, args.windy, args.cases, folder, args.layers_in_solve)
-        while True:
+        # Case by case: a fold that fails (Newton's, with --layers-in-solve)
+        # ends its own generator only.
+        for case in [*args.cases, *(["windy"] if args.windy > 0.0 else [])]:
+            windy = args.windy if case == "windy" else 0.0
+            made = starts(n, args.settle, windy, [case], folder, args.layers_in_solve)
             try:
-                name, scene, start = next(cases)
-            except StopIteration:
-                break
+                name, scene, start = next(made)
             except DivergenceError as error:  # the fold itself, by the timed integrator
                 rows.append((n, "resting fold", str(error)))
                 print(f"{n} resting fold: {error}", flush=True)
