@@ -116,7 +116,10 @@ def timed(on: Simulation, off: Simulation, frames: int) -> tuple[float, float, i
         for sim, kept in zip((on, off), times, strict=True):
             for _ in range(min(BLOCK, frames - first)):
                 start = time.perf_counter()
-                sim.advance(FRAME)
+                try:
+                    sim.advance(FRAME)
+                except DivergenceError as error:  # say which run: Newton's, on or off
+                    raise DivergenceError(f"{'on' if sim is on else 'off'}: {error}") from error
                 kept.append(time.perf_counter() - start)
     del contact.resolve
     return float(np.median(times[0])), float(np.median(times[1])), contact.report.candidates, zoned
@@ -163,8 +166,8 @@ def main() -> None:
             try:
                 name, scene, start = next(made)
             except DivergenceError as error:  # the fold itself, by the timed integrator
-                rows.append((n, "resting fold", str(error)))
-                print(f"{n} resting fold: {error}", flush=True)
+                rows.append((n, "resting fold", f"folding, on: {error}"))
+                print(f"{n} resting fold: folding, on: {error}", flush=True)
                 continue
             scene = scene.with_overrides({"solver.integrator": args.integrator, "solver.dt": None})
             if args.layers_in_solve:
