@@ -58,6 +58,7 @@ from contact_scenes import fold_a_towel  # noqa: E402
 
 from pvcloth import Simulation, load_scene  # noqa: E402
 from pvcloth.errors import DivergenceError  # noqa: E402
+from pvcloth.physics.integrators import get_integrator  # noqa: E402
 
 #: One frame of simulated time (s), the unit each measurement advances.
 FRAME = 1.0 / 60.0
@@ -92,6 +93,29 @@ def starts(
 
 #: Frames timed in a row on one simulation before turning to the other.
 BLOCK = 5
+#: What each case's row is called.
+NAMES = {"resting": "resting fold", "crumple": "violent crumple", "windy": "fold in the wind"}
+
+
+class Stalled(Exception):
+    """A timed run (``which``: "on" or "off") whose Newton iterations did
+    not converge (``error``)."""
+
+    def __init__(self, which: str, error: DivergenceError):
+        super().__init__(f"{which}: {error}")
+        self.which, self.error = which, error
+
+
+def outcome(sim: Simulation, until: float) -> str:
+    """Play ``sim`` on alone to ``until`` (s): "converged to t = ..." or
+    where Newton did not (the other run of a case that stalled, so that the
+    row says whether self-collision is what stopped it)."""
+    try:
+        while sim.state.t < until - 1e-9:
+            sim.advance(FRAME)
+    except DivergenceError as error:
+        return f"did not converge ({error})"
+    return f"converged to t = {sim.state.t:.3g} s"
 
 
 def timed(on: Simulation, off: Simulation, frames: int) -> tuple[float, float, int, list[int]]:
@@ -118,8 +142,8 @@ def timed(on: Simulation, off: Simulation, frames: int) -> tuple[float, float, i
                 start = time.perf_counter()
                 try:
                     sim.advance(FRAME)
-                except DivergenceError as error:  # say which run: Newton's, on or off
-                    raise DivergenceError(f"{'on' if sim is on else 'off'}: {error}") from error
+                except DivergenceError as error:  # Newton's: say which run
+                    raise Stalled("on" if sim is on else "off", error) from error
                 kept.append(time.perf_counter() - start)
     del contact.resolve
     return float(np.median(times[0])), float(np.median(times[1])), contact.report.candidates, zoned
@@ -151,6 +175,8 @@ def main() -> None:
         "another integrator self_collision_cost_INTEGRATOR.md)",
     )
     args = parser.parse_args()
+    if args.layers_in_solve and not get_integrator(args.integrator).holds_layers:
+        parser.error(f"--layers-in-solve: {args.integrator} cannot hold the layers in its solve")
     if args.out is None:
         named = "" if args.integrator == "fast_mass_spring" else f"_{args.integrator}"
         named += "_in_solve" if args.layers_in_solve else ""
@@ -165,9 +191,9 @@ def main() -> None:
             made = starts(n, args.settle, windy, [case], folder, args.layers_in_solve)
             try:
                 name, scene, start = next(made)
-            except DivergenceError as error:  # the fold itself, by the timed integrator
-                rows.append((n, "resting fold", f"folding, on: {error}"))
-                print(f"{n} resting fold: folding, on: {error}", flush=True)
+            except DivergenceError as error:  # the start itself, by the timed integrator
+                rows.append((n, NAMES[case], f"its start, on: {error}"))
+                print(f"{n} {NAMES[case]}: its start, on: {error}", flush=True)
                 continue
             scene = scene.with_overrides({"solver.integrator": args.integrator, "solver.dt": None})
             if args.layers_in_solve:
@@ -181,15 +207,23 @@ def main() -> None:
                 timed(on, off, 2)  # compile, warm caches
                 energy = on.energy()["kinetic"]
                 t_on, t_off, candidates, zoned = timed(on, off, args.steps)
-            except DivergenceError as error:
-                rows.append((n, name, str(error)))
-                print(f"{n} {name}: {error}", flush=True)
+            except Stalled as stalled:
+                failed, other = (on, off) if stalled.which == "on" else (off, on)
+                rest = outcome(other, failed.state.t + FRAME)
+                text = f"{stalled}; {'off' if stalled.which == 'on' else 'on'}: {rest}"
+                rows.append((n, name, text))
+                print(f"{n} {name}: {text}", flush=True)
                 continue
             zones = f"{sum(z > 0 for z in zoned)} of {len(zoned)} ({max(zoned):,} points)"
             steps = (round(FRAME / off.dt), round(FRAME / on.dt))
             rows.append((n, name, t_off, t_on, steps, candidates, zones, energy))
             print(f"{n} {name}: off {t_off * 1e3:.2f} ms, on {t_on * 1e3:.2f} ms", flush=True)
     in_solve = f"; the layers in the solve, the towel folded by {folder}" * args.layers_in_solve
+    split = (
+        "the same step, no split: the layers are in its solve"
+        if args.layers_in_solve
+        else "the steps the self-collision step bound asks for"
+    )
     lines = [
         "# Self-collision: step time on against off",
         "",
@@ -199,9 +233,8 @@ def main() -> None:
         f"(sizes {' '.join(map(str, args.sizes))}, cases {' '.join(args.cases)}, "
         f"{args.steps} frames timed, fold settled {args.settle:g} s, windy {args.windy:g} s"
         f"{in_solve}); "
-        f"median ms per 1/60 s frame of `{args.integrator}` (its automatic step off; on, the "
-        "steps the "
-        "self-collision step bound asks for), on and off measured side by side from the "
+        f"median ms per 1/60 s frame of `{args.integrator}` (its automatic step off; on, "
+        f"{split}), on and off measured side by side from the "
         f"same state, in turns of {BLOCK} frames each.",
         "",
         "Impact zones: the timed steps on in which any formed (and the most points "

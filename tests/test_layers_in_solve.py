@@ -159,13 +159,11 @@ def test_friction_between_the_layers_in_the_solve_holds_a_fold_on_a_slope():
     crease (gravity turned instead; tan 14 = 0.25): friction 0.3 between
     the layers keeps the top layer where it lies on the bottom one over a
     second, and with none, from the same state, the top layer slides
-    towards the crease. The floor's own friction (0.7) is the same in
-    both. Tilted along the crease instead, as
-    ``test_friction_between_layers_holds_a_fold_on_a_slope`` tilts the
-    towel with the layers after the step, the crease ties the top layer to
-    the bottom one and friction between them cannot be told apart (at
-    32x32, with the layers in the solve, the top layer slid 4.3 mm with
-    friction 0.3 and 1.3 mm without)."""
+    towards the crease. The floor's static friction (0.7) is the same in
+    both. With the layers in the solve, a tilt along the crease (the
+    direction ``test_friction_between_layers_holds_a_fold_on_a_slope``
+    uses with the layers after the step) does not tell friction apart:
+    the crease ties the top layer to the bottom one."""
     from contact_scenes import fold_a_towel
 
     sim, drive = fold_a_towel(16, "bdf2", friction=0.3, in_solve=True)
