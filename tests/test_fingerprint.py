@@ -11,9 +11,10 @@ On the machine and library versions that recorded them the positions must
 match bit for bit; elsewhere (another CPU's vector instructions round
 fast-math sums differently) within 1e-8 m, a thousand times what rounding
 moves a point in these few steps and far below what any change of the
-physics does. A scene an integrator cannot run (a refused step, a
-tolerance it cannot measure) is recorded as the error's message, which
-must stay the same too.
+physics does (1e-6 m for implicit_euler, whose iterative linear solve
+stops where the rounding lets it: see ``ELSEWHERE_CG``). A scene an
+integrator cannot run (a refused step, a tolerance it cannot measure) is
+recorded as the error's message, which must stay the same too.
 """
 
 from __future__ import annotations
@@ -38,6 +39,13 @@ SCENES = sorted((HERE.parent / "data" / "scenes").glob("*.toml"))
 SIZE, STEPS = 8, 12
 #: Where another machine's results may differ (m).
 ELSEWHERE = 1e-8
+#: The same for implicit_euler, whose conjugate-gradient solve stops at a
+#: relative residual of 1e-8: where it stops depends on the rounding (an
+#: iteration more or fewer), so another CPU moves its points by about that
+#: share of a step's change, and contact can carry it on (measured: 1.1e-8 m
+#: in the crumple and 9e-11 m on the cotton, on an Intel CPU against the
+#: AMD one that recorded them; every other integrator within 1e-13 m).
+ELSEWHERE_CG = 1e-6
 
 
 def machine() -> str:
@@ -124,7 +132,8 @@ def test_the_steps_land_where_they_did_when_recorded(recorded, path, integrator,
     if str(recorded["machine"]) == machine():
         np.testing.assert_array_equal(now, was)  # bit for bit
     else:
-        np.testing.assert_allclose(now, was, rtol=0.0, atol=ELSEWHERE)
+        near = ELSEWHERE_CG if integrator == "implicit_euler" else ELSEWHERE
+        np.testing.assert_allclose(now, was, rtol=0.0, atol=near)
 
 
 if __name__ == "__main__":
