@@ -229,8 +229,10 @@ def test_frames_do_not_slow_down_or_grow_memory_on_the_layers_pvcloth_picks(laye
     50 frames while its memory grows, so pvcloth never picks TBB (it comes
     after the workqueue, which always loads; see THREADING_LAYERS). On the
     layers it picks, where numba can load them, 50 frames at 64x64: the
-    last ten cost at most 20 % more than the first ten and memory grows by
-    under 20 %."""
+    last ten cost at most half as much again as the first ten (a threefold
+    slowdown is what it guards against; 20 % failed twice in a row on a
+    shared 2-core machine, 83 to 103 ms, and passed on the reruns) and
+    memory grows by under 20 %."""
     import os
     import subprocess
     import sys
@@ -252,7 +254,7 @@ def test_frames_do_not_slow_down_or_grow_memory_on_the_layers_pvcloth_picks(laye
         early_memory, late_memory = int(out[3]), int(out[4])
         assert used == layer
         assert late_memory <= 1.2 * early_memory
-        if late <= 1.2 * early:
+        if late <= 1.5 * early:
             return
     raise AssertionError(f"{layer}: frames went from {early * 1e3:.1f} to {late * 1e3:.1f} ms")
 

@@ -455,7 +455,7 @@ def one_step_fall(model, dt: float) -> float:
     >>> import pvcloth
     >>> from pvcloth.physics.integrators.penalties import one_step_fall
     >>> sim = pvcloth.Simulation(pvcloth.Scene(cloth=pvcloth.ClothSpec(resolution=(4, 4))))
-    >>> round(one_step_fall(sim.model, 0.1), 6)  # 9.81 m/s^2 for 0.1 s, twice
+    >>> round(one_step_fall(sim.model, 0.1), 6)  # 9.81 m/s^2 times (0.1 s)^2
     0.0981
     """
     gravity = model.gravity
