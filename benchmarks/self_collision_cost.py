@@ -29,14 +29,16 @@ self-collision runs after every one of them.
 With ``--layers-in-solve`` (``backward_euler`` or ``bdf2``), the layers and
 the floor enter the timed integrator's solve with self-collision on
 (``[self_collision] in_solve``: no step split), and the towel is folded
-and settled by that integrator so, from the start: from a fold settled by
-``fast_mass_spring``, Newton stops short of its tolerance in its first
-steps. A case whose Newton iterations do not converge is reported as such.
+and settled by that integrator, its layers in the solve from the start
+(from a fold settled by ``fast_mass_spring``, Newton stops short of its
+tolerance in its first steps). A case whose Newton iterations do not
+converge is a row that says which run stalled and how the other went.
 
 Run:  python benchmarks/self_collision_cost.py [--sizes 32 64 128] [--steps 40]
       [--integrator symplectic_euler] [--integrator bdf2 --layers-in-solve]
       (writes benchmarks/results/self_collision_cost.md, with another
-      integrator benchmarks/results/self_collision_cost_INTEGRATOR.md)
+      integrator benchmarks/results/self_collision_cost_INTEGRATOR.md,
+      with --layers-in-solve self_collision_cost_INTEGRATOR_in_solve.md)
 """
 
 from __future__ import annotations
